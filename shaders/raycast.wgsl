@@ -1,0 +1,381 @@
+// One invocation per pixel: cast the primary ray, keep the closest hit, then write colour,
+// normal and depth (SPEC §3–§5).
+//
+// Coordinates are camera-relative: the host moved the scene so that the camera centre is
+// the origin (in f64, before rounding to f32), so precision does not depend on where the
+// scene sits in the world.
+//
+// Feature switches are `override` constants, not run-time flags: on lavapipe every branch
+// runs whether taken or not (MEASURED.md), while an override set to false removes its code.
+
+override HAS_SPHERES: bool = true;
+override HAS_ELLIPSOIDS: bool = true;
+override HAS_PLANES: bool = true;
+override HAS_TRIANGLES: bool = true;
+override ORTHOGRAPHIC: bool = false;
+override WANT_COLOR: bool = true;
+override SHADE_BACK: bool = false;
+
+const F32_MAX: f32 = 3.40282347e38;
+// The "no hit" distance: never less than any closest-so-far.
+const NO_HIT: f32 = F32_MAX;
+
+const KIND_NONE: u32 = 0u;
+const KIND_SPHERE: u32 = 1u;
+const KIND_ELLIPSOID: u32 = 2u;
+const KIND_PLANE: u32 = 3u;
+const KIND_TRIANGLE: u32 = 4u;
+
+struct Params {
+    // The camera (SPEC §3), its extent folded into `horizontal` and `up`; for a
+    // perspective camera `direction` is scaled by D = 1/tan(angle/2).
+    direction: vec3<f32>,
+    width: u32,
+    horizontal: vec3<f32>,
+    height: u32,
+    up: vec3<f32>,
+    // First image row (from the top) of the tile this dispatch renders.
+    first_row: u32,
+    background: vec3<f32>,
+    tile_rows: u32,
+    ambient: vec3<f32>,
+    num_lights: u32,
+    num_spheres: u32,
+    num_ellipsoids: u32,
+    num_planes: u32,
+    num_triangles: u32,
+}
+
+// A sphere in world space (a similarity transform was baked into it).
+struct Sphere {
+    center: vec3<f32>,
+    radius: f32,
+    material: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
+}
+
+// A sphere under a transform that is not a similarity: the rows of the affine map W from
+// world space to the space where it is the unit sphere at the origin.
+struct Ellipsoid {
+    row0: vec4<f32>,
+    row1: vec4<f32>,
+    row2: vec4<f32>,
+    material: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
+}
+
+// n̂ · p = offset, in world space.
+struct Plane {
+    normal: vec3<f32>,
+    offset: f32,
+    material: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
+}
+
+// Vertices in world space, ordered so that (v1 − v0) × (v2 − v0) is the SPEC's normal.
+struct Triangle {
+    v0: vec3<f32>,
+    material: u32,
+    v1: vec3<f32>,
+    _pad0: u32,
+    v2: vec3<f32>,
+    _pad1: u32,
+}
+
+struct Light {
+    // −normalise(direction): from the surface toward the light.
+    to_light: vec3<f32>,
+    _pad0: u32,
+    color: vec3<f32>,
+    _pad1: u32,
+}
+
+struct PixelOut {
+    color: vec3<f32>,
+    hit: u32,
+    normal: vec3<f32>,
+    t: f32,
+}
+
+@group(0) @binding(0) var<storage, read> params: Params;
+@group(0) @binding(1) var<storage, read> spheres: array<Sphere>;
+@group(0) @binding(2) var<storage, read> ellipsoids: array<Ellipsoid>;
+@group(0) @binding(3) var<storage, read> planes: array<Plane>;
+@group(0) @binding(4) var<storage, read> triangles: array<Triangle>;
+@group(0) @binding(5) var<storage, read> materials: array<vec4<f32>>;
+@group(0) @binding(6) var<storage, read> lights: array<Light>;
+@group(0) @binding(7) var<storage, read_write> pixels: array<PixelOut>;
+
+struct Ray {
+    origin: vec3<f32>,
+    direction: vec3<f32>,
+}
+
+// Pixel (i from the left, j from the bottom), sampled at its centre; the longer image side
+// spans the camera's extent and the shorter one is cropped (SPEC §3).
+fn primary_ray(i: u32, j: u32) -> Ray {
+    let longer = f32(max(params.width, params.height));
+    let x = (f32(i) + 0.5 - 0.5 * f32(params.width)) / longer;
+    let y = (f32(j) + 0.5 - 0.5 * f32(params.height)) / longer;
+    let offset = x * params.horizontal + y * params.up;
+    if (ORTHOGRAPHIC) {
+        return Ray(offset, params.direction);
+    }
+    return Ray(vec3<f32>(0.0), normalize(params.direction + offset));
+}
+
+// Rays of an orthographic camera start at infinity (negative t is visible); perspective
+// rays start at the eye.
+fn t_min() -> f32 {
+    if (ORTHOGRAPHIC) {
+        return -F32_MAX;
+    }
+    return 0.0;
+}
+
+// The nearest root t > t_min of |f + t·d| = r, where f = origin − centre; d need not be
+// unit length. Haines, Günther, Akenine-Möller, "Precision Improvements for Ray/Sphere
+// Intersection", Ray Tracing Gems ch. 7: the discriminant from the squared distance of the
+// centre to the line (no b² − 4ac cancellation when the ray starts far away), and the
+// smaller root from c/q (no −b + √Δ cancellation).
+fn sphere_t(f: vec3<f32>, d: vec3<f32>, radius: f32, tmin: f32) -> f32 {
+    let a = dot(d, d);
+    let b = -dot(f, d);
+    let perpendicular = f + (b / a) * d;
+    let discriminant = radius * radius - dot(perpendicular, perpendicular);
+    if (discriminant < 0.0) {
+        return NO_HIT;
+    }
+    let c = dot(f, f) - radius * radius;
+    let q = b + select(-1.0, 1.0, b >= 0.0) * sqrt(a * discriminant);
+    let r0 = c / q;
+    let r1 = q / a;
+    let near = min(r0, r1);
+    let far = max(r0, r1);
+    if (near > tmin) {
+        return near;
+    }
+    if (far > tmin) {
+        return far;
+    }
+    return NO_HIT;
+}
+
+fn to_unit_sphere_point(e: Ellipsoid, p: vec3<f32>) -> vec3<f32> {
+    let h = vec4<f32>(p, 1.0);
+    return vec3<f32>(dot(e.row0, h), dot(e.row1, h), dot(e.row2, h));
+}
+
+fn to_unit_sphere_vector(e: Ellipsoid, v: vec3<f32>) -> vec3<f32> {
+    return vec3<f32>(dot(e.row0.xyz, v), dot(e.row1.xyz, v), dot(e.row2.xyz, v));
+}
+
+// SPEC §4: the ray goes into object space without renormalising, so t is the world t.
+fn ellipsoid_t(e: Ellipsoid, ray: Ray, tmin: f32) -> f32 {
+    return sphere_t(to_unit_sphere_point(e, ray.origin), to_unit_sphere_vector(e, ray.direction), 1.0, tmin);
+}
+
+// The world normal is normalise(Wᵀ · n) with n the unit sphere's normal at the hit
+// (the inverse transpose of the object-to-world map, whose inverse W we hold).
+fn ellipsoid_normal(e: Ellipsoid, world_point: vec3<f32>) -> vec3<f32> {
+    let n = to_unit_sphere_point(e, world_point);
+    return normalize(e.row0.xyz * n.x + e.row1.xyz * n.y + e.row2.xyz * n.z);
+}
+
+fn plane_t(p: Plane, ray: Ray, tmin: f32) -> f32 {
+    let denominator = dot(p.normal, ray.direction);
+    if (denominator == 0.0) {
+        return NO_HIT;
+    }
+    let t = (p.offset - dot(p.normal, ray.origin)) / denominator;
+    if (t > tmin) {
+        return t;
+    }
+    return NO_HIT;
+}
+
+// Per-ray set-up of the watertight test: the axis permutation that makes the ray's largest
+// component z, and the shear that makes the ray +z.
+struct Shear {
+    axes: vec3<u32>,
+    s: vec3<f32>,
+}
+
+fn shear_for(d: vec3<f32>) -> Shear {
+    let a = abs(d);
+    var kz = 2u;
+    if (a.x > a.y && a.x > a.z) {
+        kz = 0u;
+    } else if (a.y > a.z) {
+        kz = 1u;
+    }
+    var kx = (kz + 1u) % 3u;
+    var ky = (kx + 1u) % 3u;
+    // Keep the winding: swap the other two axes when the ray points down its main axis.
+    if (d[kz] < 0.0) {
+        let k = kx;
+        kx = ky;
+        ky = k;
+    }
+    return Shear(vec3<u32>(kx, ky, kz), vec3<f32>(d[kx] / d[kz], d[ky] / d[kz], 1.0 / d[kz]));
+}
+
+fn permute(v: vec3<f32>, k: vec3<u32>) -> vec3<f32> {
+    return vec3<f32>(v[k.x], v[k.y], v[k.z]);
+}
+
+// Watertight ray/triangle test: Woop, Benthin, Wald, "Watertight Ray/Triangle
+// Intersection", JCGT 2(1), 2013. Edge functions are computed in a frame where the ray is
+// the +z axis, so an edge shared by two triangles gives both the same value with opposite
+// signs: no ray slips between them. Edges count as inside; both sides of the triangle hit.
+fn triangle_t(tri: Triangle, ray: Ray, shear: Shear, tmin: f32) -> f32 {
+    let a = permute(tri.v0 - ray.origin, shear.axes);
+    let b = permute(tri.v1 - ray.origin, shear.axes);
+    let c = permute(tri.v2 - ray.origin, shear.axes);
+    let ax = a.x - shear.s.x * a.z;
+    let ay = a.y - shear.s.y * a.z;
+    let bx = b.x - shear.s.x * b.z;
+    let by = b.y - shear.s.y * b.z;
+    let cx = c.x - shear.s.x * c.z;
+    let cy = c.y - shear.s.y * c.z;
+    let u = cx * by - cy * bx;
+    let v = ax * cy - ay * cx;
+    let w = bx * ay - by * ax;
+    if ((u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0)) {
+        return NO_HIT;
+    }
+    let det = u + v + w;
+    if (det == 0.0) {
+        return NO_HIT;
+    }
+    let t = (u * a.z + v * b.z + w * c.z) * shear.s.z / det;
+    if (t > tmin) {
+        return t;
+    }
+    return NO_HIT;
+}
+
+fn triangle_normal(tri: Triangle) -> vec3<f32> {
+    return normalize(cross(tri.v1 - tri.v0, tri.v2 - tri.v0));
+}
+
+struct Closest {
+    t: f32,
+    kind: u32,
+    index: u32,
+}
+
+fn closest_hit(ray: Ray) -> Closest {
+    let tmin = t_min();
+    var best = Closest(NO_HIT, KIND_NONE, 0u);
+    if (HAS_SPHERES) {
+        for (var k = 0u; k < params.num_spheres; k++) {
+            let s = spheres[k];
+            let t = sphere_t(ray.origin - s.center, ray.direction, s.radius, tmin);
+            if (t < best.t) {
+                best = Closest(t, KIND_SPHERE, k);
+            }
+        }
+    }
+    if (HAS_ELLIPSOIDS) {
+        for (var k = 0u; k < params.num_ellipsoids; k++) {
+            let t = ellipsoid_t(ellipsoids[k], ray, tmin);
+            if (t < best.t) {
+                best = Closest(t, KIND_ELLIPSOID, k);
+            }
+        }
+    }
+    if (HAS_PLANES) {
+        for (var k = 0u; k < params.num_planes; k++) {
+            let t = plane_t(planes[k], ray, tmin);
+            if (t < best.t) {
+                best = Closest(t, KIND_PLANE, k);
+            }
+        }
+    }
+    if (HAS_TRIANGLES) {
+        let shear = shear_for(ray.direction);
+        for (var k = 0u; k < params.num_triangles; k++) {
+            let t = triangle_t(triangles[k], ray, shear, tmin);
+            if (t < best.t) {
+                best = Closest(t, KIND_TRIANGLE, k);
+            }
+        }
+    }
+    return best;
+}
+
+struct Surface {
+    normal: vec3<f32>,
+    material: u32,
+}
+
+fn surface_at(hit: Closest, ray: Ray) -> Surface {
+    let p = ray.origin + hit.t * ray.direction;
+    if (HAS_SPHERES && hit.kind == KIND_SPHERE) {
+        let s = spheres[hit.index];
+        return Surface((p - s.center) / s.radius, s.material);
+    }
+    if (HAS_ELLIPSOIDS && hit.kind == KIND_ELLIPSOID) {
+        let e = ellipsoids[hit.index];
+        return Surface(ellipsoid_normal(e, p), e.material);
+    }
+    if (HAS_PLANES && hit.kind == KIND_PLANE) {
+        let pl = planes[hit.index];
+        return Surface(pl.normal, pl.material);
+    }
+    if (HAS_TRIANGLES && hit.kind == KIND_TRIANGLE) {
+        let tri = triangles[hit.index];
+        return Surface(triangle_normal(tri), tri.material);
+    }
+    return Surface(vec3<f32>(0.0), 0u);
+}
+
+// SPEC §5: ambient plus Lambert per light; a back-facing hit is black unless SHADE_BACK,
+// which shades it with the flipped normal.
+fn shade(surface: Surface, ray: Ray) -> vec3<f32> {
+    var n = surface.normal;
+    if (dot(ray.direction, n) > 0.0) {
+        if (!SHADE_BACK) {
+            return vec3<f32>(0.0);
+        }
+        n = -n;
+    }
+    let diffuse = materials[surface.material].xyz;
+    var color = params.ambient * diffuse;
+    for (var k = 0u; k < params.num_lights; k++) {
+        let light = lights[k];
+        color += max(dot(light.to_light, n), 0.0) * light.color * diffuse;
+    }
+    return color;
+}
+
+@compute @workgroup_size(8, 8)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = id.x;
+    let row = id.y;
+    if (i >= params.width || row >= params.tile_rows) {
+        return;
+    }
+    // Image rows count from the top, the camera's j from the bottom.
+    let j = params.height - 1u - (params.first_row + row);
+    let ray = primary_ray(i, j);
+    let hit = closest_hit(ray);
+    var out = PixelOut(params.background, 0u, vec3<f32>(0.0), 0.0);
+    if (hit.kind != KIND_NONE) {
+        let surface = surface_at(hit, ray);
+        out.hit = 1u;
+        out.normal = surface.normal;
+        out.t = hit.t;
+        if (WANT_COLOR) {
+            out.color = shade(surface, ray);
+        }
+    }
+    pixels[row * params.width + i] = out;
+}

@@ -1,0 +1,82 @@
+//! Primary rays (SPEC §3): where pixel (i, j) looks from and in which direction.
+//!
+//! The CPU reference calls [`PrimaryRays::ray`] per pixel in f64; the GPU backend uploads
+//! the same [`PrimaryRays`] (converted to f32) and the kernel repeats the arithmetic.
+
+use crate::scene::{Camera, Projection};
+use glam::DVec3;
+
+/// A camera resolved for one image size: everything a pixel's ray depends on.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PrimaryRays {
+    pub center: DVec3,
+    pub direction: DVec3,
+    /// `horizontal` and `up` already scaled so that the screen coordinate −½…½ across the
+    /// longer image side spans the camera's extent (`size` for orthographic, `2` at
+    /// distance `D = 1/tan(angle/2)` for perspective).
+    pub horizontal: DVec3,
+    pub up: DVec3,
+    pub orthographic: bool,
+    pub width: u32,
+    pub height: u32,
+}
+
+/// A ray in world space; `direction` is unit length.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ray {
+    pub origin: DVec3,
+    pub direction: DVec3,
+}
+
+impl PrimaryRays {
+    /// Resolves `camera` for a `width × height` image. The parser guarantees the camera has
+    /// a basis (up not parallel to direction); a degenerate one yields `None`.
+    pub fn new(camera: &Camera, width: u32, height: u32) -> Option<PrimaryRays> {
+        let basis = camera.basis()?;
+        let (orthographic, extent, direction) = match camera.projection {
+            Projection::Orthographic { size } => (true, size, basis.direction),
+            // Seed notes: the image plane sits at D = 1/tan(angle/2) and spans −1…1.
+            Projection::Perspective { angle } => (false, 2.0, basis.direction / (angle / 2.0).tan()),
+        };
+        Some(PrimaryRays {
+            center: camera.center,
+            direction,
+            horizontal: basis.horizontal * extent,
+            up: basis.up * extent,
+            orthographic,
+            width,
+            height,
+        })
+    }
+
+    /// Screen coordinates of the centre of pixel (i from the left, j from the bottom),
+    /// each in −½…½ along the longer side; the shorter side is cropped symmetrically so that
+    /// pixels stay square (SPEC §3).
+    pub fn screen(&self, i: u32, j: u32) -> (f64, f64) {
+        let longer = self.width.max(self.height) as f64;
+        let x = (i as f64 + 0.5 - self.width as f64 / 2.0) / longer;
+        let y = (j as f64 + 0.5 - self.height as f64 / 2.0) / longer;
+        (x, y)
+    }
+
+    /// The ray through pixel (i from the left, j from the bottom).
+    pub fn ray(&self, i: u32, j: u32) -> Ray {
+        let (x, y) = self.screen(i, j);
+        let offset = x * self.horizontal + y * self.up;
+        if self.orthographic {
+            Ray { origin: self.center + offset, direction: self.direction }
+        } else {
+            Ray { origin: self.center, direction: (self.direction + offset).normalize() }
+        }
+    }
+
+    /// Rays from an orthographic camera start at infinity (objects behind the image plane
+    /// are seen, at negative t); perspective rays start at the eye.
+    pub fn t_min(&self) -> f64 {
+        if self.orthographic {
+            f64::NEG_INFINITY
+        } else {
+            0.0
+        }
+    }
+}

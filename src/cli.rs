@@ -1,0 +1,304 @@
+//! Command-line arguments (SPEC §1). The course's single-dash spellings (`-input`,
+//! `-shade_back`) and double-dash ones (`--input`, `--shade-back`) are the same flags, in any
+//! order. Errors are one line naming the flag; the binary exits with status 2 on them.
+
+use crate::image_io::ImageFormat;
+use std::ffi::OsString;
+use std::fmt;
+use std::path::PathBuf;
+
+/// The largest image side: TGA stores sizes in 16 bits.
+pub const MAX_SIDE: u32 = 65535;
+/// The largest image, in pixels (16384²).
+pub const MAX_PIXELS: u64 = 1 << 28;
+
+pub const USAGE: &str = "\
+raycaster: render an MIT 6.837 scene file on the GPU (wgpu) or with the f64 CPU reference
+
+Usage: raycaster -input SCENE -size W H [-output FILE] [-normals FILE] [-depth MIN MAX FILE]
+                 [-shade_back] [--backend gpu|cpu|auto]
+
+  -input FILE            scene file (obj_file paths resolve from its folder)
+  -size W H              image size in pixels
+  -output FILE           diffuse-shaded image (.tga or .png)
+  -normals FILE          normal visualisation |N| (.tga or .png)
+  -depth MIN MAX FILE    depth visualisation, white at MIN, black at MAX (.tga or .png)
+  -shade_back            shade back-facing hits as if they faced the viewer
+  --backend B            gpu, cpu (the f64 reference) or auto (default: the GPU if one is
+                         found, else the CPU with a notice)
+  -h, --help             this text
+
+Flags take one or two dashes; `-shade_back` and `--shade-back` are the same.
+At least one of -output, -normals, -depth is required.";
+
+/// Which renderer to use.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum BackendChoice {
+    Gpu,
+    Cpu,
+    #[default]
+    Auto,
+}
+
+/// A render as the command line asks for it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RenderArgs {
+    pub input: PathBuf,
+    pub width: u32,
+    pub height: u32,
+    pub output: Option<PathBuf>,
+    pub normals: Option<PathBuf>,
+    pub depth: Option<DepthArgs>,
+    pub shade_back: bool,
+    pub backend: BackendChoice,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct DepthArgs {
+    pub min: f32,
+    pub max: f32,
+    pub path: PathBuf,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub enum Command {
+    Render(RenderArgs),
+    Help,
+}
+
+/// A bad command line, as one line of text.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct UsageError(pub String);
+
+impl fmt::Display for UsageError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{} (try --help)", self.0)
+    }
+}
+
+impl std::error::Error for UsageError {}
+
+/// Parses the arguments after the program name.
+pub fn parse_args<I, S>(args: I) -> Result<Command, UsageError>
+where
+    I: IntoIterator<Item = S>,
+    S: Into<OsString>,
+{
+    let args: Vec<OsString> = args.into_iter().map(Into::into).collect();
+    let mut values = Values { args: &args, next: 0 };
+    let mut input = None;
+    let mut size = None;
+    let (mut output, mut normals, mut depth) = (None, None, None);
+    let mut shade_back = false;
+    let mut backend = BackendChoice::Auto;
+    while let Some(raw) = values.next_raw() {
+        let text = raw.to_string_lossy().into_owned();
+        let Some(flag) = flag_name(&text) else {
+            return Err(UsageError(format!("unexpected argument '{text}': flags start with '-'")));
+        };
+        let set_once = |seen: bool| if seen { Err(UsageError(format!("{text} is given twice"))) } else { Ok(()) };
+        match flag.as_str() {
+            "h" | "help" => return Ok(Command::Help),
+            "input" => {
+                set_once(input.is_some())?;
+                input = Some(values.path(&text)?);
+            }
+            "size" => {
+                set_once(size.is_some())?;
+                size = Some(values.size(&text)?);
+            }
+            "output" => {
+                set_once(output.is_some())?;
+                output = Some(values.image_path(&text)?);
+            }
+            "normals" => {
+                set_once(normals.is_some())?;
+                normals = Some(values.image_path(&text)?);
+            }
+            "depth" => {
+                set_once(depth.is_some())?;
+                depth = Some(values.depth(&text)?);
+            }
+            "shade_back" => shade_back = true,
+            "backend" => backend = values.backend(&text)?,
+            _ => return Err(UsageError(format!("unknown flag '{text}'"))),
+        }
+    }
+    let input = input.ok_or_else(|| UsageError("-input SCENE is required".into()))?;
+    let (width, height) = size.ok_or_else(|| UsageError("-size W H is required".into()))?;
+    if output.is_none() && normals.is_none() && depth.is_none() {
+        return Err(UsageError("nothing to write: give -output, -normals or -depth".into()));
+    }
+    Ok(Command::Render(RenderArgs { input, width, height, output, normals, depth, shade_back, backend }))
+}
+
+/// `-shade_back`, `--shade-back` → `shade_back`; `None` for something that is not a flag
+/// (a lone `-` or a word). A negative number is a value, never a flag, and values are read
+/// by the flag that takes them, so `-depth -1 5 d.tga` works.
+fn flag_name(arg: &str) -> Option<String> {
+    let name = arg.strip_prefix("--").or_else(|| arg.strip_prefix('-'))?;
+    if name.is_empty() {
+        return None;
+    }
+    Some(name.replace('-', "_"))
+}
+
+/// The argument list with a cursor, and readers for each kind of flag value.
+struct Values<'a> {
+    args: &'a [OsString],
+    next: usize,
+}
+
+impl Values<'_> {
+    fn next_raw(&mut self) -> Option<&OsString> {
+        let arg = self.args.get(self.next)?;
+        self.next += 1;
+        Some(arg)
+    }
+
+    fn take(&mut self, flag: &str, what: &str) -> Result<OsString, UsageError> {
+        self.next_raw().cloned().ok_or_else(|| UsageError(format!("{flag} expects {what}")))
+    }
+
+    fn path(&mut self, flag: &str) -> Result<PathBuf, UsageError> {
+        let value = self.take(flag, "a file name")?;
+        if value.is_empty() {
+            return Err(UsageError(format!("{flag} expects a file name, got an empty one")));
+        }
+        Ok(PathBuf::from(value))
+    }
+
+    fn image_path(&mut self, flag: &str) -> Result<PathBuf, UsageError> {
+        let path = self.path(flag)?;
+        if ImageFormat::from_path(&path).is_none() {
+            return Err(UsageError(format!("{flag} {}: unsupported image format, use .tga or .png", path.display())));
+        }
+        Ok(path)
+    }
+
+    fn size(&mut self, flag: &str) -> Result<(u32, u32), UsageError> {
+        let what = "two sizes: W H";
+        let w = self.take(flag, what)?;
+        let h = self.take(flag, what)?;
+        let side = |v: &OsString| -> Result<u32, UsageError> {
+            let text = v.to_string_lossy();
+            match text.parse::<u32>() {
+                Ok(n) if (1..=MAX_SIDE).contains(&n) => Ok(n),
+                _ => Err(UsageError(format!("{flag}: '{text}' is not a whole number from 1 to {MAX_SIDE}"))),
+            }
+        };
+        let (w, h) = (side(&w)?, side(&h)?);
+        if w as u64 * h as u64 > MAX_PIXELS {
+            return Err(UsageError(format!("{flag} {w} {h}: more than {MAX_PIXELS} pixels")));
+        }
+        Ok((w, h))
+    }
+
+    fn depth(&mut self, flag: &str) -> Result<DepthArgs, UsageError> {
+        let what = "three values: MIN MAX FILE";
+        let number = |v: OsString| -> Result<f32, UsageError> {
+            let text = v.to_string_lossy();
+            match text.parse::<f32>() {
+                Ok(x) if x.is_finite() => Ok(x),
+                _ => Err(UsageError(format!("{flag}: '{text}' is not a finite number"))),
+            }
+        };
+        let min = number(self.take(flag, what)?)?;
+        let max = number(self.take(flag, what)?)?;
+        if self.next >= self.args.len() {
+            return Err(UsageError(format!("{flag} expects {what}")));
+        }
+        let path = self.image_path(flag)?;
+        if min >= max {
+            return Err(UsageError(format!("{flag}: MIN ({min}) must be less than MAX ({max})")));
+        }
+        Ok(DepthArgs { min, max, path })
+    }
+
+    fn backend(&mut self, flag: &str) -> Result<BackendChoice, UsageError> {
+        let value = self.take(flag, "gpu, cpu or auto")?;
+        match value.to_string_lossy().as_ref() {
+            "gpu" => Ok(BackendChoice::Gpu),
+            "cpu" => Ok(BackendChoice::Cpu),
+            "auto" => Ok(BackendChoice::Auto),
+            other => Err(UsageError(format!("{flag}: '{other}' is not one of gpu, cpu, auto"))),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(line: &str) -> Result<Command, UsageError> {
+        parse_args(line.split_whitespace())
+    }
+
+    fn render(line: &str) -> RenderArgs {
+        match parse(line) {
+            Ok(Command::Render(args)) => args,
+            other => panic!("{line}: {other:?}"),
+        }
+    }
+
+    #[test]
+    fn course_command_line_parses() {
+        let args = render("-input s.txt -size 200 100 -output o.tga -depth 9 11 d.tga -normals n.tga -shade_back");
+        assert_eq!(args.input, PathBuf::from("s.txt"));
+        assert_eq!((args.width, args.height), (200, 100));
+        assert_eq!(args.output, Some(PathBuf::from("o.tga")));
+        assert_eq!(args.normals, Some(PathBuf::from("n.tga")));
+        assert_eq!(args.depth, Some(DepthArgs { min: 9.0, max: 11.0, path: "d.tga".into() }));
+        assert!(args.shade_back);
+        assert_eq!(args.backend, BackendChoice::Auto);
+    }
+
+    #[test]
+    fn double_dash_spellings_and_any_order() {
+        let a = render("--shade-back --output o.png --size 3 4 --input s.txt --backend cpu");
+        let b = render("-input s.txt -size 3 4 -output o.png -shade_back --backend cpu");
+        assert_eq!(a, b);
+        assert_eq!(a.backend, BackendChoice::Cpu);
+    }
+
+    #[test]
+    fn negative_depth_range_is_values_not_flags() {
+        let args = render("-input s -size 1 1 -depth -5 -1.5 d.tga");
+        assert_eq!(args.depth, Some(DepthArgs { min: -5.0, max: -1.5, path: "d.tga".into() }));
+    }
+
+    #[test]
+    fn help() {
+        assert_eq!(parse("--help"), Ok(Command::Help));
+        assert_eq!(parse("-input s -h"), Ok(Command::Help));
+    }
+
+    /// Each bad line gives an error naming the offending flag or value.
+    #[test]
+    fn errors_name_the_flag() {
+        let cases = [
+            ("-input s -size 1 1 -output o.tga -bogus", "-bogus"),
+            ("-input s -size 1 -output o.tga", "-size"),
+            ("-input s -size 0 10 -output o.tga", "-size"),
+            ("-input s -size 10 x -output o.tga", "'x'"),
+            ("-input s -size 70000 10 -output o.tga", "-size"),
+            ("-input s -size 60000 60000 -output o.tga", "-size 60000 60000"),
+            ("-input s -size 1 1 -depth 5 5 d.tga", "MIN (5) must be less than MAX (5)"),
+            ("-input s -size 1 1 -depth 5 nan d.tga", "'nan'"),
+            ("-input s -size 1 1 -depth 1 2", "-depth expects three values"),
+            ("-input s -size 1 1 -output o.bmp", "unsupported image format"),
+            ("-input s -size 1 1", "nothing to write"),
+            ("-size 1 1 -output o.tga", "-input"),
+            ("-input s -output o.tga", "-size"),
+            ("-input s -size 1 1 -output o.tga --backend metal", "'metal'"),
+            ("-input s -input t -size 1 1 -output o.tga", "-input is given twice"),
+            ("-input s -size 1 1 -output o.tga stray", "'stray'"),
+            ("-input", "-input expects a file name"),
+        ];
+        for (line, needle) in cases {
+            let err = parse(line).expect_err(line);
+            assert!(err.to_string().contains(needle), "{line}: {err}");
+            assert!(!err.to_string().contains('\n'), "{line}: not one line: {err}");
+        }
+    }
+}

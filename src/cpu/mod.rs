@@ -1,0 +1,217 @@
+//! The CPU reference renderer: f64, textbook, and independent of the GPU path's data
+//! preparation. It walks the parsed scene tree for every ray, carrying the ray into each
+//! Transform's object space as SPEC §4 says, so what it computes can be checked against
+//! the spec line by line. It is the ground truth of the tests; clarity comes before speed
+//! (rows run in parallel, and a mesh is skipped when the ray misses its bounding box).
+
+mod intersect;
+
+pub use intersect::{intersect_plane, intersect_sphere, intersect_triangle, Hit};
+
+use crate::camera::{PrimaryRays, Ray};
+use crate::render::{Frame, RenderOptions};
+use crate::scene::{Material, Mesh, Object, Scene, Shape};
+use glam::{DMat4, DVec3};
+use rayon::prelude::*;
+use std::collections::HashMap;
+
+/// Renders `scene` with the f64 reference. Panics only if the camera is degenerate, which
+/// the parser rejects.
+pub fn render(scene: &Scene, options: &RenderOptions) -> Frame {
+    let rays = PrimaryRays::new(&scene.camera, options.width, options.height)
+        .expect("the parser rejects cameras whose up is parallel to their direction");
+    let tracer = Tracer::new(scene);
+    let width = options.width as usize;
+    let mut frame = Frame::new(options);
+    let rows: Vec<Vec<PixelResult>> = (0..options.height)
+        .into_par_iter()
+        .map(|row| {
+            // Image rows run from the top; the camera's j runs from the bottom.
+            let j = options.height - 1 - row;
+            (0..options.width).map(|i| tracer.pixel(&rays.ray(i, j), rays.t_min(), options)).collect()
+        })
+        .collect();
+    for (row, pixels) in rows.into_iter().enumerate() {
+        for (i, p) in pixels.into_iter().enumerate() {
+            let k = row * width + i;
+            frame.hit[k] = p.hit.is_some();
+            if options.color {
+                frame.color[k] = p.color.as_vec3().to_array();
+            }
+            if let Some(hit) = p.hit {
+                if options.normals {
+                    frame.normal[k] = hit.normal.as_vec3().to_array();
+                }
+                if options.depth {
+                    frame.depth[k] = hit.t as f32;
+                }
+            }
+        }
+    }
+    frame
+}
+
+/// The closest hit of one world-space ray with the whole scene, `t > t_min`.
+pub fn trace(scene: &Scene, ray: &Ray, t_min: f64) -> Option<Hit> {
+    Tracer::new(scene).closest_hit(ray, t_min)
+}
+
+struct PixelResult {
+    hit: Option<Hit>,
+    color: DVec3,
+}
+
+/// The scene plus the few things worth computing once rather than per ray.
+struct Tracer<'a> {
+    scene: &'a Scene,
+    /// Bounding boxes of meshes, keyed by the mesh's address (meshes are shared by `Arc`).
+    mesh_bounds: HashMap<*const Mesh, (DVec3, DVec3)>,
+}
+
+// The raw pointers are only map keys, never dereferenced.
+unsafe impl Sync for Tracer<'_> {}
+
+impl<'a> Tracer<'a> {
+    fn new(scene: &'a Scene) -> Self {
+        let mut mesh_bounds = HashMap::new();
+        collect_mesh_bounds(&scene.root, &mut mesh_bounds);
+        Tracer { scene, mesh_bounds }
+    }
+
+    fn pixel(&self, ray: &Ray, t_min: f64, options: &RenderOptions) -> PixelResult {
+        let hit = self.closest_hit(ray, t_min);
+        let color = match (&hit, options.color) {
+            (_, false) => DVec3::ZERO,
+            (None, true) => self.scene.background.color,
+            (Some(hit), true) => self.shade(hit, ray, options.shade_back),
+        };
+        PixelResult { hit, color }
+    }
+
+    fn closest_hit(&self, ray: &Ray, t_min: f64) -> Option<Hit> {
+        let mut closest = None;
+        for object in &self.scene.root {
+            self.intersect_object(object, ray, t_min, &mut closest);
+        }
+        closest
+    }
+
+    /// SPEC §5: diffuse with ambient; a back-facing hit is black unless `shade_back`.
+    fn shade(&self, hit: &Hit, ray: &Ray, shade_back: bool) -> DVec3 {
+        let mut normal = hit.normal;
+        if ray.direction.dot(normal) > 0.0 {
+            if !shade_back {
+                return DVec3::ZERO;
+            }
+            normal = -normal;
+        }
+        let diffuse = self.material(hit.material).diffuse;
+        let mut color = self.scene.background.ambient * diffuse;
+        for light in &self.scene.lights {
+            let to_light = -light.direction.normalize();
+            color += to_light.dot(normal).max(0.0) * light.color * diffuse;
+        }
+        color
+    }
+
+    fn material(&self, index: u32) -> Material {
+        self.scene.materials[index as usize]
+    }
+
+    /// Updates `closest` if `object` has a hit nearer than it (and beyond `t_min`).
+    fn intersect_object(&self, object: &Object, ray: &Ray, t_min: f64, closest: &mut Option<Hit>) {
+        let t_max = closest.map_or(f64::INFINITY, |h| h.t);
+        let candidate = match &object.shape {
+            Shape::Group(children) => {
+                for child in children {
+                    self.intersect_object(child, ray, t_min, closest);
+                }
+                return;
+            }
+            Shape::Transform { matrix, child } => {
+                self.intersect_transformed(matrix, child, ray, t_min, closest);
+                return;
+            }
+            Shape::Sphere { center, radius, material } => {
+                intersect_sphere(*center, *radius, ray, t_min, t_max).map(|(t, n)| (t, n, *material))
+            }
+            Shape::Plane { normal, offset, material } => {
+                intersect_plane(*normal, *offset, ray, t_min, t_max).map(|(t, n)| (t, n, *material))
+            }
+            Shape::Triangle { vertices, material } => {
+                intersect_triangle(vertices, ray, t_min, t_max).map(|(t, n)| (t, n, *material))
+            }
+            Shape::Mesh { mesh, material } => {
+                self.intersect_mesh(mesh, ray, t_min, t_max).map(|(t, n)| (t, n, *material))
+            }
+        };
+        if let Some((t, normal, material)) = candidate {
+            *closest = Some(Hit { t, normal, material });
+        }
+    }
+
+    /// SPEC §4: intersect the child with `(M⁻¹·o, M⁻¹·d)`, the direction not renormalised so
+    /// that the child's t is the world t; the normal comes back as `normalise((M⁻¹)ᵀ·n)`.
+    fn intersect_transformed(&self, matrix: &DMat4, child: &Object, ray: &Ray, t_min: f64, closest: &mut Option<Hit>) {
+        let inverse = matrix.inverse();
+        let local = Ray { origin: inverse.transform_point3(ray.origin), direction: inverse.transform_vector3(ray.direction) };
+        let before = *closest;
+        self.intersect_object(child, &local, t_min, closest);
+        if let Some(hit) = closest.as_mut() {
+            if Some(*hit) != before {
+                hit.normal = inverse.transpose().transform_vector3(hit.normal).normalize();
+            }
+        }
+    }
+
+    fn intersect_mesh(&self, mesh: &Mesh, ray: &Ray, t_min: f64, t_max: f64) -> Option<(f64, DVec3)> {
+        let (lo, hi) = self.mesh_bounds[&(mesh as *const Mesh)];
+        if !ray_meets_box(ray, lo, hi, t_min, t_max) {
+            return None;
+        }
+        let mut best: Option<(f64, DVec3)> = None;
+        for k in 0..mesh.triangles.len() {
+            let t_max = best.map_or(t_max, |(t, _)| t);
+            if let Some(hit) = intersect_triangle(&mesh.triangle(k), ray, t_min, t_max) {
+                best = Some(hit);
+            }
+        }
+        best
+    }
+}
+
+fn collect_mesh_bounds(objects: &[Object], bounds: &mut HashMap<*const Mesh, (DVec3, DVec3)>) {
+    for object in objects {
+        match &object.shape {
+            Shape::Group(children) => collect_mesh_bounds(children, bounds),
+            Shape::Transform { child, .. } => collect_mesh_bounds(std::slice::from_ref(child), bounds),
+            Shape::Mesh { mesh, .. } => {
+                let lo = mesh.positions.iter().fold(DVec3::INFINITY, |a, &p| a.min(p));
+                let hi = mesh.positions.iter().fold(DVec3::NEG_INFINITY, |a, &p| a.max(p));
+                bounds.insert(std::sync::Arc::as_ptr(mesh), (lo, hi));
+            }
+            _ => {}
+        }
+    }
+}
+
+/// Slab test, conservative: the box is widened by a relative margin so that rounding can
+/// never make the reference skip a mesh that a triangle test would hit.
+fn ray_meets_box(ray: &Ray, lo: DVec3, hi: DVec3, t_min: f64, t_max: f64) -> bool {
+    let margin = (hi - lo).max_element().max(1.0) * 1e-9;
+    let (lo, hi) = (lo - DVec3::splat(margin), hi + DVec3::splat(margin));
+    let (mut near, mut far) = (t_min, t_max);
+    for axis in 0..3 {
+        let (o, d) = (ray.origin[axis], ray.direction[axis]);
+        if d == 0.0 {
+            if o < lo[axis] || o > hi[axis] {
+                return false;
+            }
+            continue;
+        }
+        let (t0, t1) = ((lo[axis] - o) / d, (hi[axis] - o) / d);
+        near = near.max(t0.min(t1));
+        far = far.min(t0.max(t1));
+    }
+    near <= far
+}

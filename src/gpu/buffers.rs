@@ -1,0 +1,220 @@
+//! The scene flattened into GPU-ready buffers: the host twins of the structs in
+//! `shaders/raycast.wgsl` (same size and field offsets, checked by a test against naga's
+//! reflection), and the walk over the scene tree that fills them.
+//!
+//! Transforms are baked on the CPU wherever that is exact: triangles and planes go to world
+//! space, spheres under a similarity become world spheres; only a sphere under a
+//! non-uniform scale keeps a matrix (an [`Ellipsoid`]). Everything is moved so that the
+//! camera sits at the origin, in f64, before it is rounded to f32.
+
+use crate::camera::PrimaryRays;
+use crate::scene::{Object, Scene, Shape};
+use bytemuck::{Pod, Zeroable};
+use glam::{DMat3, DMat4, DVec3};
+
+/// WGSL `Params`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Params {
+    pub direction: [f32; 3],
+    pub width: u32,
+    pub horizontal: [f32; 3],
+    pub height: u32,
+    pub up: [f32; 3],
+    pub first_row: u32,
+    pub background: [f32; 3],
+    pub tile_rows: u32,
+    pub ambient: [f32; 3],
+    pub num_lights: u32,
+    pub num_spheres: u32,
+    pub num_ellipsoids: u32,
+    pub num_planes: u32,
+    pub num_triangles: u32,
+}
+
+/// WGSL `Sphere`: a sphere in (camera-relative) world space.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuSphere {
+    pub center: [f32; 3],
+    pub radius: f32,
+    pub material: u32,
+    pub _pad: [u32; 3],
+}
+
+/// WGSL `Ellipsoid`: rows of the affine map from world space to the unit sphere's space.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuEllipsoid {
+    pub rows: [[f32; 4]; 3],
+    pub material: u32,
+    pub _pad: [u32; 3],
+}
+
+/// WGSL `Plane`: `normal · p = offset`, normal of unit length.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuPlane {
+    pub normal: [f32; 3],
+    pub offset: f32,
+    pub material: u32,
+    pub _pad: [u32; 3],
+}
+
+/// WGSL `Triangle`: world-space vertices, wound so that `(v1 − v0) × (v2 − v0)` is the normal.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuTriangle {
+    pub v0: [f32; 3],
+    pub material: u32,
+    pub v1: [f32; 3],
+    pub _pad0: u32,
+    pub v2: [f32; 3],
+    pub _pad1: u32,
+}
+
+/// WGSL `Light`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuLight {
+    pub to_light: [f32; 3],
+    pub _pad0: u32,
+    pub color: [f32; 3],
+    pub _pad1: u32,
+}
+
+/// WGSL `PixelOut`: what the kernel writes per pixel.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct PixelOut {
+    pub color: [f32; 3],
+    pub hit: u32,
+    pub normal: [f32; 3],
+    pub t: f32,
+}
+
+/// Everything the kernel reads, ready to upload.
+#[derive(Clone, Debug, Default)]
+pub struct SceneBuffers {
+    /// `Params` without the per-image and per-tile fields (width, height, tile).
+    pub params: Params,
+    pub orthographic: bool,
+    pub spheres: Vec<GpuSphere>,
+    pub ellipsoids: Vec<GpuEllipsoid>,
+    pub planes: Vec<GpuPlane>,
+    pub triangles: Vec<GpuTriangle>,
+    /// Diffuse colours, xyz used.
+    pub materials: Vec<[f32; 4]>,
+    pub lights: Vec<GpuLight>,
+}
+
+impl SceneBuffers {
+    /// Flattens `scene` for a `width × height` image.
+    pub fn new(scene: &Scene, rays: &PrimaryRays) -> SceneBuffers {
+        let mut buffers = SceneBuffers { orthographic: rays.orthographic, ..Default::default() };
+        let to_camera = DMat4::from_translation(-rays.center);
+        buffers.flatten(&scene.root, &to_camera);
+        buffers.materials = scene.materials.iter().map(|m| m.diffuse.as_vec3().extend(0.0).to_array()).collect();
+        buffers.lights = scene
+            .lights
+            .iter()
+            .map(|l| GpuLight { to_light: f32x3(-l.direction.normalize()), color: f32x3(l.color), ..Default::default() })
+            .collect();
+        buffers.params = Params {
+            direction: f32x3(rays.direction),
+            horizontal: f32x3(rays.horizontal),
+            up: f32x3(rays.up),
+            width: rays.width,
+            height: rays.height,
+            background: f32x3(scene.background.color),
+            ambient: f32x3(scene.background.ambient),
+            num_lights: buffers.lights.len() as u32,
+            num_spheres: buffers.spheres.len() as u32,
+            num_ellipsoids: buffers.ellipsoids.len() as u32,
+            num_planes: buffers.planes.len() as u32,
+            num_triangles: buffers.triangles.len() as u32,
+            ..Default::default()
+        };
+        buffers
+    }
+
+    /// Walks the tree with `matrix` mapping the current object space to camera-relative world
+    /// space. The tree depth is bounded by the parser's nesting limit.
+    fn flatten(&mut self, objects: &[Object], matrix: &DMat4) {
+        for object in objects {
+            match &object.shape {
+                Shape::Group(children) => self.flatten(children, matrix),
+                Shape::Transform { matrix: m, child } => self.flatten(std::slice::from_ref(child), &(*matrix * *m)),
+                Shape::Sphere { center, radius, material } => self.push_sphere(matrix, *center, *radius, *material),
+                Shape::Plane { normal, offset, material } => self.push_plane(matrix, *normal, *offset, *material),
+                Shape::Triangle { vertices, material } => self.push_triangle(matrix, vertices, *material),
+                Shape::Mesh { mesh, material } => {
+                    self.triangles.reserve(mesh.triangles.len());
+                    for k in 0..mesh.triangles.len() {
+                        self.push_triangle(matrix, &mesh.triangle(k), *material);
+                    }
+                }
+            }
+        }
+    }
+
+    fn push_sphere(&mut self, matrix: &DMat4, center: DVec3, radius: f64, material: u32) {
+        let linear = DMat3::from_mat4(*matrix);
+        if let Some(scale) = similarity_scale(&linear) {
+            self.spheres.push(GpuSphere {
+                center: f32x3(matrix.transform_point3(center)),
+                radius: (radius * scale) as f32,
+                material,
+                ..Default::default()
+            });
+            return;
+        }
+        // The unit sphere at the origin, carried to the world by matrix · T(c) · S(r);
+        // the kernel needs the inverse of that.
+        let to_world = *matrix * DMat4::from_translation(center) * DMat4::from_scale(DVec3::splat(radius));
+        let to_unit = to_world.inverse();
+        let rows = [0, 1, 2].map(|r| to_unit.row(r).as_vec4().to_array());
+        self.ellipsoids.push(GpuEllipsoid { rows, material, ..Default::default() });
+    }
+
+    /// The plane's world normal is `normalise(M⁻ᵀ·n̂)`; a point on it, `offset·n̂`, maps by M.
+    fn push_plane(&mut self, matrix: &DMat4, normal: DVec3, offset: f64, material: u32) {
+        let n = normal.normalize();
+        let world_normal = DMat3::from_mat4(*matrix).inverse().transpose().mul_vec3(n).normalize();
+        let world_point = matrix.transform_point3(offset * n);
+        self.planes.push(GpuPlane {
+            normal: f32x3(world_normal),
+            offset: world_normal.dot(world_point) as f32,
+            material,
+            ..Default::default()
+        });
+    }
+
+    /// A mirroring transform (det < 0) reverses the winding of mapped vertices, while the
+    /// SPEC's normal `normalise(M⁻ᵀ·n)` does not flip; swapping two vertices keeps them equal.
+    fn push_triangle(&mut self, matrix: &DMat4, vertices: &[DVec3; 3], material: u32) {
+        let [a, mut b, mut c] = vertices.map(|v| f32x3(matrix.transform_point3(v)));
+        if DMat3::from_mat4(*matrix).determinant() < 0.0 {
+            std::mem::swap(&mut b, &mut c);
+        }
+        self.triangles.push(GpuTriangle { v0: a, material, v1: b, v2: c, ..Default::default() });
+    }
+}
+
+/// `Some(s)` when `linear` is `s` times a rotation or reflection (columns orthogonal and of
+/// equal length, to f64 rounding), so a sphere stays a sphere of radius `s·r`.
+fn similarity_scale(linear: &DMat3) -> Option<f64> {
+    let cols = [linear.x_axis, linear.y_axis, linear.z_axis];
+    let lengths = cols.map(|c| c.length());
+    let scale = lengths[0];
+    let tolerance = 1e-12 * scale;
+    let equal = lengths.iter().all(|l| (l - scale).abs() <= tolerance);
+    let orthogonal = (cols[0].dot(cols[1]).abs() <= tolerance * scale)
+        && (cols[0].dot(cols[2]).abs() <= tolerance * scale)
+        && (cols[1].dot(cols[2]).abs() <= tolerance * scale);
+    (equal && orthogonal && scale > 0.0).then_some(scale)
+}
+
+fn f32x3(v: DVec3) -> [f32; 3] {
+    v.as_vec3().to_array()
+}

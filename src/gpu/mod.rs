@@ -1,0 +1,362 @@
+//! The GPU backend: a WGSL compute kernel driven through wgpu, headless.
+//!
+//! A [`GpuRenderer`] owns the device (created once per process, reused for any number of
+//! scenes) and a cache of kernels specialised by `override` constants. [`GpuRenderer::render`]
+//! flattens the scene ([`buffers`]), dispatches one invocation per pixel in tiles of rows
+//! (so memory is bounded by the tile, not the frame), and reads the float results back
+//! into a [`Frame`].
+
+pub mod buffers;
+
+use crate::camera::PrimaryRays;
+use crate::render::{Frame, RenderOptions};
+use crate::scene::Scene;
+use buffers::{PixelOut, SceneBuffers};
+use std::collections::HashMap;
+use std::sync::Mutex;
+use wgpu::util::DeviceExt;
+
+/// The kernel's source, compiled into the binary.
+pub const SHADER_SOURCE: &str = include_str!("../../shaders/raycast.wgsl");
+
+/// Workgroup edge, as in `@workgroup_size(8, 8)`.
+const WORKGROUP: u32 = 8;
+
+/// The largest output tile we ask for, whatever the adapter allows: bounds host memory too.
+const MAX_TILE_BYTES: u64 = 64 << 20;
+
+#[derive(Debug, thiserror::Error)]
+pub enum GpuError {
+    #[error("no GPU adapter found ({0}); on a machine without a GPU install Mesa's lavapipe (apt-get install mesa-vulkan-drivers) or use --backend cpu")]
+    NoAdapter(String),
+    #[error("could not open the GPU device: {0}")]
+    Device(String),
+    #[error("the scene is too large for this GPU: {0}")]
+    TooLarge(String),
+    #[error("reading the image back from the GPU failed: {0}")]
+    Readback(String),
+}
+
+/// The `override` constants a kernel is compiled with: only what the scene and the requested
+/// outputs need is compiled in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct KernelConfig {
+    pub has_spheres: bool,
+    pub has_ellipsoids: bool,
+    pub has_planes: bool,
+    pub has_triangles: bool,
+    pub orthographic: bool,
+    pub want_color: bool,
+    pub shade_back: bool,
+}
+
+impl KernelConfig {
+    pub fn new(buffers: &SceneBuffers, options: &RenderOptions) -> KernelConfig {
+        KernelConfig {
+            has_spheres: !buffers.spheres.is_empty(),
+            has_ellipsoids: !buffers.ellipsoids.is_empty(),
+            has_planes: !buffers.planes.is_empty(),
+            has_triangles: !buffers.triangles.is_empty(),
+            orthographic: buffers.orthographic,
+            want_color: options.color,
+            shade_back: options.shade_back,
+        }
+    }
+
+    /// The values for `PipelineCompilationOptions::constants`.
+    pub fn constants(&self) -> [(&'static str, f64); 7] {
+        let b = |v: bool| if v { 1.0 } else { 0.0 };
+        [
+            ("HAS_SPHERES", b(self.has_spheres)),
+            ("HAS_ELLIPSOIDS", b(self.has_ellipsoids)),
+            ("HAS_PLANES", b(self.has_planes)),
+            ("HAS_TRIANGLES", b(self.has_triangles)),
+            ("ORTHOGRAPHIC", b(self.orthographic)),
+            ("WANT_COLOR", b(self.want_color)),
+            ("SHADE_BACK", b(self.shade_back)),
+        ]
+    }
+}
+
+/// A wgpu device with the ray-casting kernel, ready to render scenes.
+pub struct GpuRenderer {
+    device: wgpu::Device,
+    queue: wgpu::Queue,
+    adapter_info: wgpu::AdapterInfo,
+    limits: wgpu::Limits,
+    bind_group_layout: wgpu::BindGroupLayout,
+    pipeline_layout: wgpu::PipelineLayout,
+    module: wgpu::ShaderModule,
+    pipelines: Mutex<HashMap<KernelConfig, wgpu::ComputePipeline>>,
+}
+
+impl GpuRenderer {
+    /// Opens the first adapter wgpu offers (real GPUs come before CPU ones such as lavapipe;
+    /// `WGPU_BACKEND` and the other wgpu environment variables are honoured).
+    pub fn new() -> Result<GpuRenderer, GpuError> {
+        pollster::block_on(Self::new_async())
+    }
+
+    async fn new_async() -> Result<GpuRenderer, GpuError> {
+        let mut descriptor = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
+        if std::env::var_os("WGPU_BACKEND").is_none() {
+            descriptor.backends = wgpu::Backends::PRIMARY;
+        }
+        let instance = wgpu::Instance::new(descriptor);
+        let adapter = instance
+            .request_adapter(&wgpu::RequestAdapterOptions {
+                power_preference: wgpu::PowerPreference::HighPerformance,
+                ..Default::default()
+            })
+            .await
+            .map_err(|e| GpuError::NoAdapter(e.to_string()))?;
+        // The defaults are below what lavapipe and real GPUs offer (MEASURED.md); ask for all.
+        let limits = adapter.limits();
+        let (device, queue) = adapter
+            .request_device(&wgpu::DeviceDescriptor {
+                label: Some("raycaster"),
+                required_limits: limits.clone(),
+                ..Default::default()
+            })
+            .await
+            .map_err(|e| GpuError::Device(e.to_string()))?;
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("raycast.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(SHADER_SOURCE.into()),
+        });
+        let bind_group_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("raycast bindings"),
+            entries: &(0..8).map(storage_entry).collect::<Vec<_>>(),
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("raycast layout"),
+            bind_group_layouts: &[Some(&bind_group_layout)],
+            immediate_size: 0,
+        });
+        Ok(GpuRenderer {
+            device,
+            queue,
+            adapter_info: adapter.get_info(),
+            limits,
+            bind_group_layout,
+            pipeline_layout,
+            module,
+            pipelines: Mutex::new(HashMap::new()),
+        })
+    }
+
+    /// Which adapter this renderer runs on (name, backend, device type).
+    pub fn adapter_info(&self) -> &wgpu::AdapterInfo {
+        &self.adapter_info
+    }
+
+    /// Renders `scene` into float buffers; see [`crate::image_io`] for images.
+    pub fn render(&self, scene: &Scene, options: &RenderOptions) -> Result<Frame, GpuError> {
+        let rays = PrimaryRays::new(&scene.camera, options.width, options.height)
+            .expect("the parser rejects cameras whose up is parallel to their direction");
+        let buffers = SceneBuffers::new(scene, &rays);
+        let pipeline = self.pipeline(KernelConfig::new(&buffers, options));
+        let inputs = self.upload(&buffers)?;
+        let mut frame = Frame::new(options);
+        let tile_rows = self.tile_rows(options.width)?;
+        let mut first_row = 0;
+        while first_row < options.height {
+            let rows = tile_rows.min(options.height - first_row);
+            let pixels = self.render_tile(&pipeline, &inputs, buffers.params, first_row, rows)?;
+            store_tile(&mut frame, &pixels, first_row);
+            first_row += rows;
+        }
+        Ok(frame)
+    }
+
+    fn pipeline(&self, config: KernelConfig) -> wgpu::ComputePipeline {
+        let mut cache = self.pipelines.lock().unwrap_or_else(|e| e.into_inner());
+        cache
+            .entry(config)
+            .or_insert_with(|| {
+                self.device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                    label: Some("raycast"),
+                    layout: Some(&self.pipeline_layout),
+                    module: &self.module,
+                    entry_point: Some("main"),
+                    compilation_options: wgpu::PipelineCompilationOptions {
+                        constants: &config.constants(),
+                        zero_initialize_workgroup_memory: false,
+                    },
+                    cache: None,
+                })
+            })
+            .clone()
+    }
+
+    /// How many image rows one dispatch renders: as many as fit the adapter's storage
+    /// binding limit and our own cap, and the dispatch size limit.
+    fn tile_rows(&self, width: u32) -> Result<u32, GpuError> {
+        let row_bytes = width as u64 * std::mem::size_of::<PixelOut>() as u64;
+        let budget = MAX_TILE_BYTES
+            .min(self.limits.max_storage_buffer_binding_size as u64)
+            .min(self.limits.max_buffer_size);
+        let rows = budget / row_bytes;
+        let max_groups = self.limits.max_compute_workgroups_per_dimension as u64;
+        if rows == 0 || (width as u64).div_ceil(WORKGROUP as u64) > max_groups {
+            return Err(GpuError::TooLarge(format!("an image {width} pixels wide exceeds the adapter's limits")));
+        }
+        Ok(rows.min(max_groups * WORKGROUP as u64) as u32)
+    }
+
+    fn upload(&self, buffers: &SceneBuffers) -> Result<SceneInputs, GpuError> {
+        let limit = self.limits.max_storage_buffer_binding_size as u64;
+        let storage = |label: &str, bytes: &[u8]| -> Result<wgpu::Buffer, GpuError> {
+            if bytes.len() as u64 > limit {
+                return Err(GpuError::TooLarge(format!(
+                    "{label}: {} bytes exceed the adapter's storage binding limit of {limit} bytes",
+                    bytes.len()
+                )));
+            }
+            Ok(self.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents: bytes,
+                usage: wgpu::BufferUsages::STORAGE,
+            }))
+        };
+        Ok(SceneInputs {
+            spheres: storage("spheres", non_empty(&buffers.spheres))?,
+            ellipsoids: storage("ellipsoids", non_empty(&buffers.ellipsoids))?,
+            planes: storage("planes", non_empty(&buffers.planes))?,
+            triangles: storage("triangles", non_empty(&buffers.triangles))?,
+            materials: storage("materials", non_empty(&buffers.materials))?,
+            lights: storage("lights", non_empty(&buffers.lights))?,
+        })
+    }
+
+    fn render_tile(
+        &self,
+        pipeline: &wgpu::ComputePipeline,
+        inputs: &SceneInputs,
+        mut params: buffers::Params,
+        first_row: u32,
+        rows: u32,
+    ) -> Result<Vec<PixelOut>, GpuError> {
+        params.first_row = first_row;
+        params.tile_rows = rows;
+        let params_buffer = self.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("params"),
+            contents: bytemuck::bytes_of(&params),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
+        let size = params.width as u64 * rows as u64 * std::mem::size_of::<PixelOut>() as u64;
+        let output = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("pixels"),
+            size,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        let readback = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("readback"),
+            size,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let bindings = [
+            &params_buffer,
+            &inputs.spheres,
+            &inputs.ellipsoids,
+            &inputs.planes,
+            &inputs.triangles,
+            &inputs.materials,
+            &inputs.lights,
+            &output,
+        ];
+        let entries: Vec<_> = bindings
+            .iter()
+            .enumerate()
+            .map(|(k, b)| wgpu::BindGroupEntry { binding: k as u32, resource: b.as_entire_binding() })
+            .collect();
+        let bind_group = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("raycast"),
+            layout: &self.bind_group_layout,
+            entries: &entries,
+        });
+        let mut encoder = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("raycast") });
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("raycast"), timestamp_writes: None });
+            pass.set_pipeline(pipeline);
+            pass.set_bind_group(0, &bind_group, &[]);
+            pass.dispatch_workgroups(params.width.div_ceil(WORKGROUP), rows.div_ceil(WORKGROUP), 1);
+        }
+        encoder.copy_buffer_to_buffer(&output, 0, &readback, 0, size);
+        self.queue.submit([encoder.finish()]);
+        read_back(&self.device, &readback)
+    }
+}
+
+/// The scene's read-only buffers on the device.
+struct SceneInputs {
+    spheres: wgpu::Buffer,
+    ellipsoids: wgpu::Buffer,
+    planes: wgpu::Buffer,
+    triangles: wgpu::Buffer,
+    materials: wgpu::Buffer,
+    lights: wgpu::Buffer,
+}
+
+fn storage_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            // The last binding is the output.
+            ty: wgpu::BufferBindingType::Storage { read_only: binding != 7 },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+/// A zero-sized buffer cannot be bound, so an empty list is uploaded as one zeroed element
+/// (the kernel reads only as many as `Params` counts).
+fn non_empty<T: bytemuck::Pod>(items: &[T]) -> &[u8] {
+    const ZEROS: [u8; 64] = [0; 64];
+    if items.is_empty() {
+        &ZEROS[..std::mem::size_of::<T>()]
+    } else {
+        bytemuck::cast_slice(items)
+    }
+}
+
+fn read_back(device: &wgpu::Device, buffer: &wgpu::Buffer) -> Result<Vec<PixelOut>, GpuError> {
+    let slice = buffer.slice(..);
+    let (sender, receiver) = std::sync::mpsc::channel();
+    slice.map_async(wgpu::MapMode::Read, move |result| {
+        let _ = sender.send(result);
+    });
+    device.poll(wgpu::PollType::wait_indefinitely()).map_err(|e| GpuError::Readback(e.to_string()))?;
+    receiver
+        .recv()
+        .map_err(|e| GpuError::Readback(e.to_string()))?
+        .map_err(|e| GpuError::Readback(e.to_string()))?;
+    let pixels = {
+        let view = slice.get_mapped_range().map_err(|e| GpuError::Readback(e.to_string()))?;
+        bytemuck::cast_slice::<u8, PixelOut>(&view).to_vec()
+    };
+    buffer.unmap();
+    Ok(pixels)
+}
+
+fn store_tile(frame: &mut Frame, pixels: &[PixelOut], first_row: u32) {
+    let start = first_row as usize * frame.width as usize;
+    for (k, p) in pixels.iter().enumerate() {
+        let index = start + k;
+        frame.hit[index] = p.hit != 0;
+        if !frame.color.is_empty() {
+            frame.color[index] = p.color;
+        }
+        if !frame.normal.is_empty() {
+            frame.normal[index] = p.normal;
+        }
+        if !frame.depth.is_empty() {
+            frame.depth[index] = p.t;
+        }
+    }
+}

@@ -1,0 +1,63 @@
+//! What a render is asked for and what it returns, independent of the backend.
+//!
+//! Both backends fill a [`Frame`] of float buffers (before any quantisation), so the two can
+//! be compared on the numbers themselves, and [`crate::image_io`] turns a frame into the
+//! 8-bit images of SPEC §5 the same way for both.
+
+/// Which images to produce and how (SPEC §1).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RenderOptions {
+    pub width: u32,
+    pub height: u32,
+    /// Compute the diffuse-shaded colour (`-output`).
+    pub color: bool,
+    /// Compute the world normal (`-normals`).
+    pub normals: bool,
+    /// Compute the hit distance (`-depth`).
+    pub depth: bool,
+    /// Shade back-facing hits as if they faced the viewer (`-shade_back`).
+    pub shade_back: bool,
+}
+
+impl RenderOptions {
+    /// A render of every output at `width × height`, back faces black.
+    pub fn all(width: u32, height: u32) -> Self {
+        RenderOptions { width, height, color: true, normals: true, depth: true, shade_back: false }
+    }
+
+    pub fn pixel_count(&self) -> usize {
+        self.width as usize * self.height as usize
+    }
+}
+
+/// The float result of a render. Pixels are stored row by row from the **top** row of the
+/// image (the order image files use); buffers that were not asked for are empty.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Frame {
+    pub width: u32,
+    pub height: u32,
+    /// Whether the pixel's ray hit anything (always filled).
+    pub hit: Vec<bool>,
+    /// Linear RGB, unclamped (background colour where nothing was hit).
+    pub color: Vec<[f32; 3]>,
+    /// Unit world-space normal as the intersection returned it (not flipped, not abs'd);
+    /// zero where nothing was hit.
+    pub normal: Vec<[f32; 3]>,
+    /// Signed world-space ray parameter `t` of the closest hit; 0 where nothing was hit.
+    pub depth: Vec<f32>,
+}
+
+impl Frame {
+    /// An empty frame with buffers sized for what `options` asks for.
+    pub fn new(options: &RenderOptions) -> Frame {
+        let n = options.pixel_count();
+        Frame {
+            width: options.width,
+            height: options.height,
+            hit: vec![false; n],
+            color: if options.color { vec![[0.0; 3]; n] } else { Vec::new() },
+            normal: if options.normals { vec![[0.0; 3]; n] } else { Vec::new() },
+            depth: if options.depth { vec![0.0; n] } else { Vec::new() },
+        }
+    }
+}

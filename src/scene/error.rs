@@ -1,0 +1,42 @@
+//! The one error type of the scene front end.
+
+use super::model::Location;
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+/// Why a scene (or one of its OBJ meshes) could not be read.
+///
+/// Displays as `FILE:LINE:COL: MESSAGE`, or `FILE: MESSAGE` when the problem has no single
+/// place in the file (an unreadable file, a missing camera). For errors inside an OBJ mesh,
+/// `file` is the OBJ file and the message says which scene line referenced it.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct SceneError {
+    pub file: PathBuf,
+    pub location: Option<Location>,
+    pub message: String,
+}
+
+impl SceneError {
+    /// An error at a place in `file`.
+    pub fn at(file: &Path, location: Location, message: impl Into<String>) -> Self {
+        SceneError { file: file.to_path_buf(), location: Some(location), message: message.into() }
+    }
+
+    /// An error about `file` as a whole.
+    pub fn in_file(file: &Path, message: impl Into<String>) -> Self {
+        SceneError { file: file.to_path_buf(), location: None, message: message.into() }
+    }
+}
+
+impl fmt::Display for SceneError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.location {
+            Some(Location { line, col }) => {
+                write!(f, "{}:{}:{}: {}", self.file.display(), line, col, self.message)
+            }
+            None => write!(f, "{}: {}", self.file.display(), self.message),
+        }
+    }
+}
+
+impl std::error::Error for SceneError {}

@@ -1,0 +1,16 @@
+//! Scene front end: lexer, parser and OBJ reader, producing the typed [`model`].
+//!
+//! Entry points: [`load_scene`] / [`parse_scene`] for scene files (SPEC §2) and
+//! [`load_obj`] / [`parse_obj`] for meshes. Every failure is a [`SceneError`] that names
+//! the file, line and column; no input makes them panic.
+
+mod error;
+mod lexer;
+pub mod model;
+mod obj;
+mod parser;
+
+pub use error::SceneError;
+pub use model::*;
+pub use obj::{load_obj, parse_obj};
+pub use parser::{load_scene, parse_scene, MAX_NESTING};

@@ -1,0 +1,794 @@
+//! Recursive-descent parser for the scene format (SPEC §2).
+//!
+//! One function per grammar rule. Every error is located at the token that caused it and
+//! says what was expected and what was found. The parser reads the token stream once; the
+//! only checks deferred to the end are those that need a block written later in the file
+//! (material indices used before the `Materials` block).
+
+use super::error::SceneError;
+use super::lexer::{describe, parse_count, parse_decimal, read_source, Lexer, Token};
+use super::model::{
+    Background, Camera, DirectionalLight, Location, Material, Mesh, Object, Projection, Scene, Shape,
+};
+use super::obj::load_obj;
+use glam::{DMat3, DMat4, DVec3, DVec4};
+use std::collections::HashMap;
+use std::fs;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// The deepest nesting of `Group`/`Transform` blocks accepted (the top-level `Group` is
+/// level 1). Deeper nesting is an error at the keyword that exceeds it, so hostile input
+/// cannot overflow the stack of the recursive parser (or of anything that later walks the
+/// tree recursively).
+pub const MAX_NESTING: usize = 1000;
+
+/// Reads the scene file at `path` and parses it with [`parse_scene`].
+pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
+    let text = read_source(path)?;
+    parse_scene(&text, path)
+}
+
+/// Parses scene text (SPEC §2). `path` is the file the text came from: it names the file in
+/// error messages and is the folder `obj_file` paths are resolved against (before the
+/// working directory). OBJ meshes are loaded while parsing; a mesh used twice is loaded once
+/// and shared.
+///
+/// Transforms compose as `M = T1 · T2 · … · Tn` (the first listed is applied last), except
+/// `Matrix { … }`, which pre-multiplies (`M = Matrix · M_so_far`) as the course's reference
+/// parser does: `Translate 1 0 0 Matrix {…}` applies the translation first, then the matrix.
+pub fn parse_scene(text: &str, path: &Path) -> Result<Scene, SceneError> {
+    Parser::new(text, path).scene()
+}
+
+type Result<T, E = SceneError> = std::result::Result<T, E>;
+
+const TOP_LEVEL_BLOCKS: &str =
+    "one of OrthographicCamera, PerspectiveCamera, Lights, Background, Materials, Group";
+const OBJECT_KEYWORDS: [&str; 6] = ["Group", "Sphere", "Plane", "Triangle", "TriangleMesh", "Transform"];
+const GROUP_ITEMS: &str =
+    "`}`, MaterialIndex or an object (Group, Sphere, Plane, Triangle, TriangleMesh, Transform)";
+const TRANSFORM_ITEMS: &str = "a transformation (Scale, UniformScale, Translate, XRotate, YRotate, \
+     ZRotate, Rotate, Matrix) or an object (Group, Sphere, Plane, Triangle, TriangleMesh, Transform)";
+const PHONG_FIELDS: [&str; 6] =
+    ["diffuseColor", "specularColor", "exponent", "transparentColor", "reflectiveColor", "indexOfRefraction"];
+const PHONG_WARNING: &str = "PhongMaterial: specular, reflective and transparent terms are ignored";
+
+/// The top-level blocks read so far (each may appear once).
+#[derive(Default)]
+struct TopLevel {
+    camera: Option<Camera>,
+    lights: Option<Vec<DirectionalLight>>,
+    background: Option<BackgroundBlock>,
+    materials: Option<Vec<Material>>,
+    root: Option<Vec<Object>>,
+    /// Block kind and keyword location, to report duplicates.
+    seen: Vec<(&'static str, Location)>,
+}
+
+struct BackgroundBlock {
+    background: Background,
+    /// Whether the file set `ambientLight` (the no-lights warning mentions the override).
+    ambient_given: bool,
+}
+
+/// How one `Transform` step combines with the matrix built so far.
+enum Compose {
+    /// `M = M · T` (Scale, Translate, rotations).
+    After(DMat4),
+    /// `M = T · M` (`Matrix`, the reference parser's quirk).
+    Before(DMat4),
+}
+
+/// The declared and actual number of items of a counted block (`numObjects` and friends).
+struct Count<'a> {
+    block: &'a str,
+    field: &'static str,
+    noun: &'static str,
+    declared: u64,
+    found: u64,
+}
+
+impl Count<'_> {
+    /// Counts one more item; the error message if that is one more than declared.
+    fn add(&mut self) -> Option<String> {
+        self.found += 1;
+        (self.found > self.declared).then(|| {
+            format!(
+                "{} declares {} {} but has at least {} {}",
+                self.block, self.field, self.declared, self.found, self.noun
+            )
+        })
+    }
+
+    /// The error message if fewer items than declared were found.
+    fn shortfall(&self) -> Option<String> {
+        (self.found != self.declared).then(|| {
+            format!("{} declares {} {} but has {} {}", self.block, self.field, self.declared, self.found, self.noun)
+        })
+    }
+}
+
+struct Parser<'a> {
+    lexer: Lexer<'a>,
+    path: &'a Path,
+    /// Current `Group`/`Transform` nesting level.
+    depth: usize,
+    /// `numMaterials`, once the `Materials` block has been read.
+    material_count: Option<usize>,
+    /// The material of the last `MaterialIndex`: it applies to every following object in
+    /// file order, whatever the hierarchy.
+    current_material: Option<u32>,
+    /// Material indices read before the `Materials` block, checked at the end.
+    unchecked_material_refs: Vec<(u32, Location)>,
+    /// Loaded meshes by canonical path, so a mesh used twice is shared.
+    meshes: HashMap<PathBuf, Arc<Mesh>>,
+    warnings: Vec<String>,
+}
+
+impl<'a> Parser<'a> {
+    fn new(text: &'a str, path: &'a Path) -> Self {
+        Parser {
+            lexer: Lexer::new(text),
+            path,
+            depth: 0,
+            material_count: None,
+            current_material: None,
+            unchecked_material_refs: Vec::new(),
+            meshes: HashMap::new(),
+            warnings: Vec::new(),
+        }
+    }
+
+    // ---- tokens and errors ----
+
+    fn error(&self, location: Location, message: impl Into<String>) -> SceneError {
+        SceneError::at(self.path, location, message)
+    }
+
+    /// The next token; at the end of the file, an error saying what was `expected`.
+    fn expect(&mut self, expected: &str) -> Result<Token<'a>> {
+        self.lexer.next_token().ok_or_else(|| {
+            self.error(self.lexer.location(), format!("unexpected end of file, expected {expected}"))
+        })
+    }
+
+    fn unexpected(&self, token: Token, expected: &str) -> SceneError {
+        self.error(token.location, format!("expected {expected}, found {}", describe(token.text)))
+    }
+
+    /// "unknown KIND `word`, expected …" for a word; a brace gets the plain "expected …".
+    fn unknown(&self, token: Token, kind: &str, expected: &str) -> SceneError {
+        if token.text == "{" || token.text == "}" {
+            self.unexpected(token, expected)
+        } else {
+            self.error(token.location, format!("unknown {kind} {}, expected {expected}", describe(token.text)))
+        }
+    }
+
+    /// The `{` that must follow `keyword`.
+    fn open(&mut self, keyword: Token) -> Result<()> {
+        self.punctuation("{", &format!("`{{` after {}", keyword.text))
+    }
+
+    fn punctuation(&mut self, brace: &str, expected: &str) -> Result<()> {
+        let token = self.expect(expected)?;
+        if token.text == brace {
+            Ok(())
+        } else {
+            Err(self.unexpected(token, expected))
+        }
+    }
+
+    fn number(&mut self) -> Result<(f64, Location)> {
+        let token = self.expect("a number")?;
+        match parse_decimal(token.text) {
+            Some(value) => Ok((value, token.location)),
+            None => Err(self.error(token.location, format!("expected a number, found {}", describe(token.text)))),
+        }
+    }
+
+    /// Three numbers, and the location of the first.
+    fn vec3(&mut self) -> Result<(DVec3, Location)> {
+        let (x, location) = self.number()?;
+        let (y, _) = self.number()?;
+        let (z, _) = self.number()?;
+        Ok((DVec3::new(x, y, z), location))
+    }
+
+    fn nonzero_vec3(&mut self, what: &str) -> Result<DVec3> {
+        let (v, location) = self.vec3()?;
+        if v == DVec3::ZERO {
+            return Err(self.error(location, format!("{what} must not be the zero vector")));
+        }
+        Ok(v)
+    }
+
+    fn positive(&mut self, what: &str) -> Result<f64> {
+        let (value, location) = self.number()?;
+        if value <= 0.0 {
+            return Err(self.error(location, format!("{what} must be positive, found {value}")));
+        }
+        Ok(value)
+    }
+
+    /// A non-negative integer (counts and indices).
+    fn count_value(&mut self) -> Result<(u64, Location)> {
+        let token = self.expect("a non-negative integer")?;
+        match parse_count(token.text) {
+            Some(value) => Ok((value, token.location)),
+            None => Err(self.unexpected(token, "a non-negative integer")),
+        }
+    }
+
+    /// `FIELD N`, the first line of a counted block such as `Group { numObjects N … }`.
+    fn count_field(&mut self, keyword: Token<'a>, field: &'static str, noun: &'static str) -> Result<Count<'a>> {
+        let expected = format!("`{field}` after `{} {{`", keyword.text);
+        let token = self.expect(&expected)?;
+        if token.text != field {
+            return Err(self.unexpected(token, &expected));
+        }
+        let (declared, _) = self.count_value()?;
+        Ok(Count { block: keyword.text, field, noun, declared, found: 0 })
+    }
+
+    // ---- blocks of named fields ----
+
+    /// `{ (FIELD value)* }` with each of `fields` at most once, in any order; `field` parses
+    /// the value of the field whose name token it is given. Returns where the `}` is, to
+    /// locate "missing field" errors.
+    fn fields_block(
+        &mut self,
+        keyword: Token,
+        fields: &[&'static str],
+        mut field: impl FnMut(&mut Self, Token<'a>) -> Result<()>,
+    ) -> Result<Location> {
+        self.open(keyword)?;
+        let expected = format!("`}}` or one of {}", fields.join(", "));
+        let mut seen: Vec<&str> = Vec::new();
+        loop {
+            let token = self.expect(&expected)?;
+            if token.text == "}" {
+                return Ok(token.location);
+            }
+            if !fields.contains(&token.text) {
+                return Err(self.unknown(token, &format!("field in {}", keyword.text), &expected));
+            }
+            if seen.contains(&token.text) {
+                return Err(self.error(token.location, format!("duplicate field `{}` in {}", token.text, keyword.text)));
+            }
+            seen.push(token.text);
+            field(self, token)?;
+        }
+    }
+
+    fn required<T>(&self, value: Option<T>, keyword: Token, field: &str, close: Location) -> Result<T> {
+        value.ok_or_else(|| self.error(close, format!("{} is missing `{field}`", keyword.text)))
+    }
+
+    // ---- top level ----
+
+    fn scene(mut self) -> Result<Scene> {
+        let mut blocks = TopLevel::default();
+        while let Some(token) = self.lexer.next_token() {
+            self.top_level_block(token, &mut blocks)?;
+        }
+        self.finish(blocks)
+    }
+
+    fn top_level_block(&mut self, token: Token<'a>, blocks: &mut TopLevel) -> Result<()> {
+        match token.text {
+            "OrthographicCamera" | "PerspectiveCamera" => {
+                self.first_of_kind("camera", token, &mut blocks.seen)?;
+                blocks.camera = Some(self.camera(token)?);
+            }
+            "Lights" => {
+                self.first_of_kind("Lights", token, &mut blocks.seen)?;
+                blocks.lights = Some(self.lights(token)?);
+            }
+            "Background" => {
+                self.first_of_kind("Background", token, &mut blocks.seen)?;
+                blocks.background = Some(self.background(token)?);
+            }
+            "Materials" => {
+                self.first_of_kind("Materials", token, &mut blocks.seen)?;
+                blocks.materials = Some(self.materials(token)?);
+            }
+            "Group" => {
+                self.first_of_kind("Group", token, &mut blocks.seen)?;
+                if let Shape::Group(children) = self.group(token)?.shape {
+                    blocks.root = Some(children);
+                }
+            }
+            _ => return Err(self.unknown(token, "block", TOP_LEVEL_BLOCKS)),
+        }
+        Ok(())
+    }
+
+    fn first_of_kind(&self, kind: &'static str, token: Token, seen: &mut Vec<(&'static str, Location)>) -> Result<()> {
+        if let Some((_, first)) = seen.iter().find(|(k, _)| *k == kind) {
+            return Err(self.error(
+                token.location,
+                format!("duplicate {kind} block (the first one is at {}:{})", first.line, first.col),
+            ));
+        }
+        seen.push((kind, token.location));
+        Ok(())
+    }
+
+    fn finish(mut self, blocks: TopLevel) -> Result<Scene> {
+        let camera = blocks.camera.ok_or_else(|| {
+            SceneError::in_file(self.path, "no camera: expected an OrthographicCamera or PerspectiveCamera block")
+        })?;
+        let materials = blocks.materials.unwrap_or_default();
+        self.check_material_refs(materials.len())?;
+        let lights = blocks.lights.unwrap_or_default();
+        let mut background = blocks.background.unwrap_or(BackgroundBlock { background: Background::default(), ambient_given: false });
+        if lights.is_empty() {
+            self.warnings.push(no_lights_warning(&background));
+            background.background.ambient = DVec3::ONE;
+        }
+        Ok(Scene {
+            path: self.path.to_path_buf(),
+            camera,
+            lights,
+            background: background.background,
+            materials,
+            root: blocks.root.unwrap_or_default(),
+            warnings: self.warnings,
+        })
+    }
+
+    /// Checks the material indices that were read before the `Materials` block.
+    fn check_material_refs(&self, material_count: usize) -> Result<()> {
+        match self.unchecked_material_refs.iter().find(|(index, _)| *index as usize >= material_count) {
+            Some(&(index, location)) => Err(self.material_out_of_range(index.into(), material_count, location)),
+            None => Ok(()),
+        }
+    }
+
+    fn material_out_of_range(&self, index: u64, material_count: usize, location: Location) -> SceneError {
+        self.error(location, format!("MaterialIndex {index} out of range: numMaterials is {material_count}"))
+    }
+
+    // ---- camera, lights, background, materials ----
+
+    fn camera(&mut self, keyword: Token<'a>) -> Result<Camera> {
+        let perspective = keyword.text == "PerspectiveCamera";
+        let extent_field = if perspective { "angle" } else { "size" };
+        let (mut center, mut direction, mut up, mut extent) = (None, None, None, None);
+        let close = self.fields_block(keyword, &["center", "direction", "up", extent_field], |p, field| {
+            match field.text {
+                "center" => center = Some(p.vec3()?.0),
+                "direction" => direction = Some(p.nonzero_vec3("direction")?),
+                "up" => up = Some((p.nonzero_vec3("up")?, field.location)),
+                _ if perspective => extent = Some(p.field_of_view()?),
+                _ => extent = Some(p.positive("size")?),
+            }
+            Ok(())
+        })?;
+        let extent = self.required(extent, keyword, extent_field, close)?;
+        let (up, up_location) = self.required(up, keyword, "up", close)?;
+        let camera = Camera {
+            projection: if perspective {
+                Projection::Perspective { angle: extent }
+            } else {
+                Projection::Orthographic { size: extent }
+            },
+            center: self.required(center, keyword, "center", close)?,
+            direction: self.required(direction, keyword, "direction", close)?,
+            up,
+            location: keyword.location,
+        };
+        if camera.basis().is_none() {
+            return Err(self.error(
+                up_location,
+                format!("up ({}) is parallel to direction ({})", show(camera.up), show(camera.direction)),
+            ));
+        }
+        Ok(camera)
+    }
+
+    /// A perspective camera's `angle`: degrees in the file, radians in the model.
+    fn field_of_view(&mut self) -> Result<f64> {
+        let (degrees, location) = self.number()?;
+        if !(degrees > 0.0 && degrees < 180.0) {
+            return Err(self.error(location, format!("angle must be between 0 and 180 degrees, found {degrees}")));
+        }
+        Ok(degrees.to_radians())
+    }
+
+    fn lights(&mut self, keyword: Token<'a>) -> Result<Vec<DirectionalLight>> {
+        const ITEMS: &str = "`}` or DirectionalLight";
+        self.open(keyword)?;
+        let mut count = self.count_field(keyword, "numLights", "lights")?;
+        let mut lights = Vec::new();
+        loop {
+            let token = self.expect(ITEMS)?;
+            match token.text {
+                "}" => return self.check_shortfall(&count, token).map(|()| lights),
+                "DirectionalLight" => {
+                    self.check_extra(&mut count, token)?;
+                    lights.push(self.directional_light(token)?);
+                }
+                _ => return Err(self.unknown(token, "light", ITEMS)),
+            }
+        }
+    }
+
+    fn check_extra(&self, count: &mut Count, token: Token) -> Result<()> {
+        match count.add() {
+            Some(message) => Err(self.error(token.location, message)),
+            None => Ok(()),
+        }
+    }
+
+    fn check_shortfall(&self, count: &Count, close: Token) -> Result<()> {
+        match count.shortfall() {
+            Some(message) => Err(self.error(close.location, message)),
+            None => Ok(()),
+        }
+    }
+
+    fn directional_light(&mut self, keyword: Token<'a>) -> Result<DirectionalLight> {
+        let (mut direction, mut color) = (None, None);
+        let close = self.fields_block(keyword, &["direction", "color"], |p, field| {
+            match field.text {
+                "direction" => direction = Some(p.nonzero_vec3("light direction")?),
+                _ => color = Some(p.vec3()?.0),
+            }
+            Ok(())
+        })?;
+        Ok(DirectionalLight {
+            direction: self.required(direction, keyword, "direction", close)?,
+            color: self.required(color, keyword, "color", close)?,
+        })
+    }
+
+    fn background(&mut self, keyword: Token<'a>) -> Result<BackgroundBlock> {
+        let mut background = Background::default();
+        let mut ambient_given = false;
+        self.fields_block(keyword, &["color", "ambientLight"], |p, field| {
+            let value = p.vec3()?.0;
+            match field.text {
+                "color" => background.color = value,
+                _ => (background.ambient, ambient_given) = (value, true),
+            }
+            Ok(())
+        })?;
+        Ok(BackgroundBlock { background, ambient_given })
+    }
+
+    fn materials(&mut self, keyword: Token<'a>) -> Result<Vec<Material>> {
+        const ITEMS: &str = "`}`, Material or PhongMaterial";
+        self.open(keyword)?;
+        let mut count = self.count_field(keyword, "numMaterials", "materials")?;
+        let mut materials = Vec::new();
+        loop {
+            let token = self.expect(ITEMS)?;
+            match token.text {
+                "}" => {
+                    self.check_shortfall(&count, token)?;
+                    break;
+                }
+                "Material" | "PhongMaterial" => {
+                    self.check_extra(&mut count, token)?;
+                    materials.push(self.material(token)?);
+                }
+                _ => return Err(self.unknown(token, "material", ITEMS)),
+            }
+        }
+        self.material_count = Some(materials.len());
+        Ok(materials)
+    }
+
+    fn material(&mut self, keyword: Token<'a>) -> Result<Material> {
+        let phong = keyword.text == "PhongMaterial";
+        let fields: &[&'static str] = if phong { &PHONG_FIELDS } else { &["diffuseColor"] };
+        let mut diffuse = DVec3::ONE;
+        self.fields_block(keyword, fields, |p, field| {
+            match field.text {
+                "diffuseColor" => diffuse = p.vec3()?.0,
+                // Parsed for syntax, then dropped: the ray caster only shades diffusely.
+                "exponent" | "indexOfRefraction" => drop(p.number()?),
+                _ => drop(p.vec3()?),
+            }
+            Ok(())
+        })?;
+        if phong && !self.warnings.iter().any(|w| w == PHONG_WARNING) {
+            self.warnings.push(PHONG_WARNING.to_string());
+        }
+        Ok(Material { diffuse })
+    }
+
+    // ---- objects ----
+
+    /// Enters a `Group` or `Transform`, refusing to nest deeper than [`MAX_NESTING`].
+    fn enter(&mut self, keyword: Token) -> Result<()> {
+        self.depth += 1;
+        if self.depth > MAX_NESTING {
+            return Err(self.error(
+                keyword.location,
+                format!("nesting too deep: more than {MAX_NESTING} levels of Group/Transform"),
+            ));
+        }
+        Ok(())
+    }
+
+    /// An OBJECT; `keyword` is one of [`OBJECT_KEYWORDS`].
+    fn object(&mut self, keyword: Token<'a>) -> Result<Object> {
+        let shape = match keyword.text {
+            "Group" => return self.group(keyword),
+            "Transform" => return self.transform(keyword),
+            _ => {
+                let material = self.material_for(keyword)?;
+                match keyword.text {
+                    "Sphere" => self.sphere(keyword, material)?,
+                    "Plane" => self.plane(keyword, material)?,
+                    "Triangle" => self.triangle(keyword, material)?,
+                    "TriangleMesh" => self.triangle_mesh(keyword, material)?,
+                    _ => return Err(self.unknown(keyword, "object", GROUP_ITEMS)),
+                }
+            }
+        };
+        Ok(Object { shape, location: keyword.location })
+    }
+
+    fn material_for(&self, keyword: Token) -> Result<u32> {
+        self.current_material.ok_or_else(|| {
+            self.error(keyword.location, format!("{} before any MaterialIndex: objects need a material", keyword.text))
+        })
+    }
+
+    fn group(&mut self, keyword: Token<'a>) -> Result<Object> {
+        self.enter(keyword)?;
+        self.open(keyword)?;
+        let mut count = self.count_field(keyword, "numObjects", "objects")?;
+        let mut children = Vec::new();
+        loop {
+            let token = self.expect(GROUP_ITEMS)?;
+            match token.text {
+                "}" => {
+                    self.check_shortfall(&count, token)?;
+                    break;
+                }
+                "MaterialIndex" => self.material_index()?,
+                text if OBJECT_KEYWORDS.contains(&text) => {
+                    self.check_extra(&mut count, token)?;
+                    children.push(self.object(token)?);
+                }
+                _ => return Err(self.unknown(token, "object", GROUP_ITEMS)),
+            }
+        }
+        self.depth -= 1;
+        Ok(Object { shape: Shape::Group(children), location: keyword.location })
+    }
+
+    /// `MaterialIndex I`: the material of every object that follows in the file.
+    fn material_index(&mut self) -> Result<()> {
+        let (index, location) = self.count_value()?;
+        let known_count = self.material_count;
+        let index = match u32::try_from(index) {
+            Ok(index) if known_count.is_none_or(|n| (index as usize) < n) => index,
+            _ => return Err(self.material_out_of_range(index, known_count.unwrap_or(0), location)),
+        };
+        if known_count.is_none() {
+            self.unchecked_material_refs.push((index, location));
+        }
+        self.current_material = Some(index);
+        Ok(())
+    }
+
+    fn sphere(&mut self, keyword: Token<'a>, material: u32) -> Result<Shape> {
+        let (mut center, mut radius) = (None, None);
+        let close = self.fields_block(keyword, &["center", "radius"], |p, field| {
+            match field.text {
+                "center" => center = Some(p.vec3()?.0),
+                _ => radius = Some(p.positive("radius")?),
+            }
+            Ok(())
+        })?;
+        Ok(Shape::Sphere {
+            center: self.required(center, keyword, "center", close)?,
+            radius: self.required(radius, keyword, "radius", close)?,
+            material,
+        })
+    }
+
+    fn plane(&mut self, keyword: Token<'a>, material: u32) -> Result<Shape> {
+        let (mut normal, mut offset) = (None, None);
+        let close = self.fields_block(keyword, &["normal", "offset"], |p, field| {
+            match field.text {
+                "normal" => normal = Some(p.nonzero_vec3("plane normal")?),
+                _ => offset = Some(p.number()?.0),
+            }
+            Ok(())
+        })?;
+        Ok(Shape::Plane {
+            normal: self.required(normal, keyword, "normal", close)?,
+            offset: self.required(offset, keyword, "offset", close)?,
+            material,
+        })
+    }
+
+    fn triangle(&mut self, keyword: Token<'a>, material: u32) -> Result<Shape> {
+        const FIELDS: [&str; 3] = ["vertex0", "vertex1", "vertex2"];
+        let mut vertices = [None; 3];
+        let close = self.fields_block(keyword, &FIELDS, |p, field| {
+            let slot = FIELDS.iter().position(|f| *f == field.text).and_then(|i| vertices.get_mut(i));
+            if let Some(slot) = slot {
+                *slot = Some(p.vec3()?.0);
+            }
+            Ok(())
+        })?;
+        let [v0, v1, v2] = vertices;
+        Ok(Shape::Triangle {
+            vertices: [
+                self.required(v0, keyword, "vertex0", close)?,
+                self.required(v1, keyword, "vertex1", close)?,
+                self.required(v2, keyword, "vertex2", close)?,
+            ],
+            material,
+        })
+    }
+
+    fn triangle_mesh(&mut self, keyword: Token<'a>, material: u32) -> Result<Shape> {
+        let mut mesh = None;
+        let close = self.fields_block(keyword, &["obj_file"], |p, _| {
+            let token = p.expect("an OBJ file path")?;
+            if token.text == "{" || token.text == "}" {
+                return Err(p.unexpected(token, "an OBJ file path"));
+            }
+            mesh = Some(p.mesh(token)?);
+            Ok(())
+        })?;
+        Ok(Shape::Mesh { mesh: self.required(mesh, keyword, "obj_file", close)?, material })
+    }
+
+    /// Loads (or reuses) the mesh named by `token`.
+    fn mesh(&mut self, token: Token) -> Result<Arc<Mesh>> {
+        let path = self.resolve_obj_path(token)?;
+        let key = fs::canonicalize(&path).unwrap_or_else(|_| path.clone());
+        if let Some(mesh) = self.meshes.get(&key) {
+            return Ok(Arc::clone(mesh));
+        }
+        let mesh = Arc::new(load_obj(&path).map_err(|mut error| {
+            let Location { line, col } = token.location;
+            error.message = format!("{} (obj_file of {}:{line}:{col})", error.message, self.path.display());
+            error
+        })?);
+        self.meshes.insert(key, Arc::clone(&mesh));
+        Ok(mesh)
+    }
+
+    /// `obj_file` paths are relative to the scene file's folder, then the working directory.
+    /// Only regular files qualify (a device such as `/dev/zero` would never end).
+    fn resolve_obj_path(&self, token: Token) -> Result<PathBuf> {
+        let name = Path::new(token.text);
+        let folder = self.path.parent().unwrap_or(Path::new(""));
+        let mut not_regular = None;
+        for candidate in [folder.join(name), name.to_path_buf()] {
+            match fs::metadata(&candidate) {
+                Ok(metadata) if metadata.is_file() => return Ok(candidate),
+                Ok(_) => not_regular = not_regular.or(Some(candidate)),
+                Err(_) => {}
+            }
+        }
+        let message = match not_regular {
+            Some(path) => format!("obj_file {}: `{}` is not a regular file", describe(token.text), path.display()),
+            None => format!(
+                "obj_file {} not found (looked in `{}` and in the working directory)",
+                describe(token.text),
+                folder.display()
+            ),
+        };
+        Err(self.error(token.location, message))
+    }
+
+    fn transform(&mut self, keyword: Token<'a>) -> Result<Object> {
+        self.enter(keyword)?;
+        self.open(keyword)?;
+        let mut matrix = DMat4::IDENTITY;
+        let child = loop {
+            let token = self.expect(TRANSFORM_ITEMS)?;
+            if OBJECT_KEYWORDS.contains(&token.text) {
+                self.check_invertible(&matrix, keyword)?;
+                break self.object(token)?;
+            }
+            match self.transformation(token)? {
+                Compose::After(step) => matrix *= step,
+                Compose::Before(step) => matrix = step * matrix,
+            }
+        };
+        self.punctuation("}", "`}` after the Transform's object")?;
+        self.depth -= 1;
+        Ok(Object { shape: Shape::Transform { matrix, child: Box::new(child) }, location: keyword.location })
+    }
+
+    fn transformation(&mut self, token: Token<'a>) -> Result<Compose> {
+        let step = match token.text {
+            "Scale" => DMat4::from_scale(self.vec3()?.0),
+            "UniformScale" => DMat4::from_scale(DVec3::splat(self.number()?.0)),
+            "Translate" => DMat4::from_translation(self.vec3()?.0),
+            "XRotate" => DMat4::from_rotation_x(self.number()?.0.to_radians()),
+            "YRotate" => DMat4::from_rotation_y(self.number()?.0.to_radians()),
+            "ZRotate" => DMat4::from_rotation_z(self.number()?.0.to_radians()),
+            "Rotate" => self.rotate(token)?,
+            "Matrix" => return Ok(Compose::Before(self.matrix(token)?)),
+            _ => return Err(self.unknown(token, "transformation", TRANSFORM_ITEMS)),
+        };
+        Ok(Compose::After(step))
+    }
+
+    /// `Rotate { axis degrees }`: a right-handed rotation about the (normalised) axis.
+    fn rotate(&mut self, keyword: Token) -> Result<DMat4> {
+        self.open(keyword)?;
+        let (axis, axis_location) = self.vec3()?;
+        let (degrees, _) = self.number()?;
+        self.punctuation("}", "`}` after the Rotate angle")?;
+        // Dividing by the largest component first keeps huge axes from overflowing.
+        let axis = (axis / axis.abs().max_element()).try_normalize().ok_or_else(|| {
+            self.error(axis_location, "Rotate axis must not be the zero vector")
+        })?;
+        Ok(DMat4::from_axis_angle(axis, degrees.to_radians()))
+    }
+
+    /// `Matrix { 16 numbers }`, row-major; it must be affine (last row `0 0 0 1`).
+    fn matrix(&mut self, keyword: Token) -> Result<DMat4> {
+        self.open(keyword)?;
+        let mut rows = [0.0; 16];
+        for value in &mut rows {
+            *value = self.number()?.0;
+        }
+        self.punctuation("}", "`}` after the 16 numbers of Matrix")?;
+        let matrix = DMat4::from_cols_array(&rows).transpose();
+        let last_row = matrix.row(3);
+        if last_row != DVec4::W {
+            return Err(self.error(
+                keyword.location,
+                format!("Matrix must be affine: its last row must be 0 0 0 1, found {}", show4(last_row)),
+            ));
+        }
+        Ok(matrix)
+    }
+
+    fn check_invertible(&self, matrix: &DMat4, keyword: Token) -> Result<()> {
+        match singularity(matrix) {
+            Some(message) => Err(self.error(keyword.location, message)),
+            None => Ok(()),
+        }
+    }
+}
+
+/// Why `matrix` cannot be inverted reliably, if it cannot: non-finite entries, or a linear
+/// part whose determinant is 0 or tiny relative to its largest entry (|det| ≤ 1e-12·max³;
+/// computed on the matrix divided by max, so large scales cannot overflow).
+fn singularity(matrix: &DMat4) -> Option<String> {
+    if !matrix.is_finite() {
+        return Some("transform has non-finite entries (it overflows)".to_string());
+    }
+    let linear = DMat3::from_mat4(*matrix);
+    let largest = linear.to_cols_array().iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+    let determinant = linear.determinant();
+    if largest == 0.0 || determinant == 0.0 {
+        return Some("singular transform (determinant 0)".to_string());
+    }
+    let relative = (linear * (1.0 / largest)).determinant();
+    (relative.abs() <= 1e-12).then(|| format!("singular transform (determinant {determinant:e}, too close to 0)"))
+}
+
+fn no_lights_warning(background: &BackgroundBlock) -> String {
+    let mut warning = "no lights: ambient light set to 1 1 1 (flat colour)".to_string();
+    if background.ambient_given {
+        warning += &format!(", replacing the file's ambientLight {}", show(background.background.ambient));
+    }
+    warning
+}
+
+fn show(v: DVec3) -> String {
+    format!("{} {} {}", v.x, v.y, v.z)
+}
+
+fn show4(v: DVec4) -> String {
+    format!("{} {} {} {}", v.x, v.y, v.z, v.w)
+}

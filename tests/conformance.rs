@@ -1,0 +1,86 @@
+//! The course's 18 command lines, run through the binary exactly as written (inside a copy of
+//! `../shared/mit6837/a2`, as the course runs them), with each backend; each of the 30 images
+//! is compared with the course's own sample in `a2/expected/`. At most 0.1% of an image's
+//! pixels (40 of 40 000) may differ by more than 1 level in any channel.
+
+mod common;
+
+use common::{corpus, pixel_diff};
+use std::path::Path;
+use std::process::Command;
+
+/// The largest share of pixels off by more than one level, per image and backend.
+const MAX_OFF_FRACTION: f64 = 0.001;
+
+fn copy_course_folder(to: &Path) {
+    let from = corpus().join("a2");
+    for entry in std::fs::read_dir(&from).expect("../shared/mit6837/a2 is readable") {
+        let path = entry.unwrap().path();
+        if path.is_file() {
+            std::fs::copy(&path, to.join(path.file_name().unwrap())).unwrap();
+        }
+    }
+}
+
+fn course_commands() -> Vec<Vec<String>> {
+    let text = std::fs::read_to_string(corpus().join("a2/commands.txt")).unwrap();
+    text.lines().filter(|l| !l.trim().is_empty()).map(|l| l.split_whitespace().map(String::from).collect()).collect()
+}
+
+/// The image files a command line writes (the value after -output/-normals, the third after -depth).
+fn outputs_of(command: &[String]) -> Vec<String> {
+    let mut outputs = Vec::new();
+    for (k, arg) in command.iter().enumerate() {
+        match arg.as_str() {
+            "-output" | "-normals" => outputs.push(command[k + 1].clone()),
+            "-depth" => outputs.push(command[k + 3].clone()),
+            _ => {}
+        }
+    }
+    outputs
+}
+
+fn conformance(backend: &str) {
+    if backend == "gpu" && common::gpu().is_none() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    copy_course_folder(dir.path());
+    let commands = course_commands();
+    assert_eq!(commands.len(), 18, "the course has 18 command lines");
+    let mut failures = Vec::new();
+    let mut images = 0;
+    println!("backend {backend}: pixels off by more than 1 level (of 40000), per course image");
+    for command in &commands {
+        let status = Command::new(env!("CARGO_BIN_EXE_raycaster"))
+            .args(command)
+            .args(["--backend", backend])
+            .current_dir(dir.path())
+            .status()
+            .unwrap();
+        assert!(status.success(), "{} failed: {status}", command.join(" "));
+        for output in outputs_of(command) {
+            let ours = raycaster::image_io::read_image(&dir.path().join(&output)).unwrap();
+            let stem = output.trim_end_matches(".tga");
+            let expected = raycaster::image_io::read_image(&corpus().join(format!("a2/expected/{stem}.png"))).unwrap();
+            let diff = pixel_diff(&ours, &expected);
+            println!("  {stem:<22} {:>5}   (max diff {})", diff.off_by_more_than_one, diff.max);
+            if diff.off_by_more_than_one as f64 > MAX_OFF_FRACTION * diff.pixels as f64 {
+                failures.push(format!("{stem}: {} pixels off", diff.off_by_more_than_one));
+            }
+            images += 1;
+        }
+    }
+    assert_eq!(images, 30, "the course's command lines write 30 images");
+    assert!(failures.is_empty(), "backend {backend}: {failures:?}");
+}
+
+#[test]
+fn course_images_cpu_reference() {
+    conformance("cpu");
+}
+
+#[test]
+fn course_images_gpu() {
+    conformance("gpu");
+}

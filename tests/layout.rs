@@ -1,0 +1,154 @@
+//! The kernel parses and validates with naga (no GPU needed), and every struct the host
+//! uploads or reads back has exactly the size and field offsets naga reports for its WGSL
+//! twin, so a field added on one side only cannot silently shift the others.
+
+use raycaster::gpu::buffers::{GpuEllipsoid, GpuLight, GpuPlane, GpuSphere, GpuTriangle, Params, PixelOut};
+use raycaster::gpu::SHADER_SOURCE;
+use std::mem::{offset_of, size_of};
+
+fn module() -> naga::Module {
+    naga::front::wgsl::parse_str(SHADER_SOURCE).unwrap_or_else(|e| panic!("{}", e.emit_to_string(SHADER_SOURCE)))
+}
+
+/// (size, [(member name, offset)]) of the WGSL struct `name`.
+fn wgsl_layout(module: &naga::Module, name: &str) -> (u32, Vec<(String, u32)>) {
+    let (_, ty) = module
+        .types
+        .iter()
+        .find(|(_, t)| t.name.as_deref() == Some(name))
+        .unwrap_or_else(|| panic!("no struct {name} in the shader"));
+    match &ty.inner {
+        naga::TypeInner::Struct { members, span } => {
+            (*span, members.iter().map(|m| (m.name.clone().unwrap_or_default(), m.offset)).collect())
+        }
+        other => panic!("{name} is not a struct: {other:?}"),
+    }
+}
+
+fn check(module: &naga::Module, name: &str, rust_size: usize, rust_offsets: &[(&str, usize)]) {
+    let (size, members) = wgsl_layout(module, name);
+    assert_eq!(size as usize, rust_size, "size of {name}");
+    let wgsl: Vec<(String, u32)> = members.into_iter().filter(|(n, _)| !n.starts_with("_pad")).collect();
+    let rust: Vec<(String, u32)> = rust_offsets.iter().map(|(n, o)| (n.to_string(), *o as u32)).collect();
+    assert_eq!(wgsl, rust, "fields and offsets of {name}");
+}
+
+#[test]
+fn shader_parses_and_validates() {
+    let module = module();
+    naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::default())
+        .validate(&module)
+        .unwrap_or_else(|e| panic!("{}", e.emit_to_string(SHADER_SOURCE)));
+}
+
+#[test]
+fn host_structs_match_the_shader() {
+    let m = module();
+    check(
+        &m,
+        "Params",
+        size_of::<Params>(),
+        &[
+            ("direction", offset_of!(Params, direction)),
+            ("width", offset_of!(Params, width)),
+            ("horizontal", offset_of!(Params, horizontal)),
+            ("height", offset_of!(Params, height)),
+            ("up", offset_of!(Params, up)),
+            ("first_row", offset_of!(Params, first_row)),
+            ("background", offset_of!(Params, background)),
+            ("tile_rows", offset_of!(Params, tile_rows)),
+            ("ambient", offset_of!(Params, ambient)),
+            ("num_lights", offset_of!(Params, num_lights)),
+            ("num_spheres", offset_of!(Params, num_spheres)),
+            ("num_ellipsoids", offset_of!(Params, num_ellipsoids)),
+            ("num_planes", offset_of!(Params, num_planes)),
+            ("num_triangles", offset_of!(Params, num_triangles)),
+        ],
+    );
+    check(
+        &m,
+        "Sphere",
+        size_of::<GpuSphere>(),
+        &[
+            ("center", offset_of!(GpuSphere, center)),
+            ("radius", offset_of!(GpuSphere, radius)),
+            ("material", offset_of!(GpuSphere, material)),
+        ],
+    );
+    check(
+        &m,
+        "Ellipsoid",
+        size_of::<GpuEllipsoid>(),
+        &[
+            ("row0", offset_of!(GpuEllipsoid, rows)),
+            ("row1", offset_of!(GpuEllipsoid, rows) + 16),
+            ("row2", offset_of!(GpuEllipsoid, rows) + 32),
+            ("material", offset_of!(GpuEllipsoid, material)),
+        ],
+    );
+    check(
+        &m,
+        "Plane",
+        size_of::<GpuPlane>(),
+        &[
+            ("normal", offset_of!(GpuPlane, normal)),
+            ("offset", offset_of!(GpuPlane, offset)),
+            ("material", offset_of!(GpuPlane, material)),
+        ],
+    );
+    check(
+        &m,
+        "Triangle",
+        size_of::<GpuTriangle>(),
+        &[
+            ("v0", offset_of!(GpuTriangle, v0)),
+            ("material", offset_of!(GpuTriangle, material)),
+            ("v1", offset_of!(GpuTriangle, v1)),
+            ("v2", offset_of!(GpuTriangle, v2)),
+        ],
+    );
+    check(
+        &m,
+        "Light",
+        size_of::<GpuLight>(),
+        &[("to_light", offset_of!(GpuLight, to_light)), ("color", offset_of!(GpuLight, color))],
+    );
+    check(
+        &m,
+        "PixelOut",
+        size_of::<PixelOut>(),
+        &[
+            ("color", offset_of!(PixelOut, color)),
+            ("hit", offset_of!(PixelOut, hit)),
+            ("normal", offset_of!(PixelOut, normal)),
+            ("t", offset_of!(PixelOut, t)),
+        ],
+    );
+}
+
+/// Each binding's array stride equals the size of the Rust element uploaded to it
+/// (materials travel as `array<vec4<f32>>`, i.e. `[f32; 4]`).
+#[test]
+fn binding_strides_match() {
+    let m = module();
+    let expected = [
+        (1, size_of::<GpuSphere>()),
+        (2, size_of::<GpuEllipsoid>()),
+        (3, size_of::<GpuPlane>()),
+        (4, size_of::<GpuTriangle>()),
+        (5, size_of::<[f32; 4]>()),
+        (6, size_of::<GpuLight>()),
+        (7, size_of::<PixelOut>()),
+    ];
+    for (binding, rust_size) in expected {
+        let (_, var) = m
+            .global_variables
+            .iter()
+            .find(|(_, v)| v.binding.as_ref().map(|b| (b.group, b.binding)) == Some((0, binding)))
+            .unwrap_or_else(|| panic!("no binding {binding}"));
+        match m.types[var.ty].inner {
+            naga::TypeInner::Array { stride, .. } => assert_eq!(stride as usize, rust_size, "stride of binding {binding}"),
+            ref other => panic!("binding {binding} is not an array: {other:?}"),
+        }
+    }
+}
