@@ -118,7 +118,20 @@ fn encode_to_temp(path: &Path, image: &RgbImage) -> Result<tempfile::NamedTempFi
     result.map_err(|e| fail(e.to_string()))?;
     out.flush().map_err(|e| fail(e.to_string()))?;
     drop(out);
+    make_readable(&temp).map_err(|e| fail(e.to_string()))?;
     Ok(temp)
+}
+
+/// Temporary files are private (0600); an image is an ordinary file (0644).
+#[cfg(unix)]
+fn make_readable(temp: &tempfile::NamedTempFile) -> std::io::Result<()> {
+    use std::os::unix::fs::PermissionsExt;
+    temp.as_file().set_permissions(std::fs::Permissions::from_mode(0o644))
+}
+
+#[cfg(not(unix))]
+fn make_readable(_: &tempfile::NamedTempFile) -> std::io::Result<()> {
+    Ok(())
 }
 
 /// Reads a TGA or PNG image as 8-bit RGB (used by tests and `compare`).

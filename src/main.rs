@@ -5,6 +5,7 @@ use raycaster::cli::{self, Command};
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
+    give_mesa_a_runtime_dir();
     let args = match cli::parse_args(std::env::args_os().skip(1)) {
         Ok(Command::Help) => {
             println!("{}", cli::USAGE);
@@ -40,4 +41,51 @@ fn main() -> ExitCode {
             ExitCode::FAILURE
         }
     }
+}
+
+/// Mesa's Vulkan drivers print "XDG_RUNTIME_DIR is invalid or not set" on every start when
+/// the variable is missing (headless machines, CI). Point it at a private folder of ours
+/// before any thread exists, so the message does not bury our own.
+fn give_mesa_a_runtime_dir() {
+    if std::env::var_os("XDG_RUNTIME_DIR").is_some() {
+        return;
+    }
+    let dir = std::env::temp_dir().join(format!("raycaster-runtime-{}", user_id()));
+    if make_private_dir(&dir).is_ok() {
+        std::env::set_var("XDG_RUNTIME_DIR", dir);
+    }
+}
+
+#[cfg(unix)]
+fn user_id() -> u32 {
+    use std::os::unix::fs::MetadataExt;
+    std::fs::metadata("/proc/self").map(|m| m.uid()).unwrap_or(0)
+}
+
+#[cfg(not(unix))]
+fn user_id() -> u32 {
+    0
+}
+
+#[cfg(unix)]
+fn make_private_dir(dir: &std::path::Path) -> std::io::Result<()> {
+    use std::os::unix::fs::{DirBuilderExt, MetadataExt, PermissionsExt};
+    match std::fs::DirBuilder::new().mode(0o700).create(dir) {
+        Ok(()) => Ok(()),
+        Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
+            let meta = std::fs::metadata(dir)?;
+            let ours = meta.is_dir() && meta.uid() == user_id() && meta.permissions().mode() & 0o077 == 0;
+            if ours {
+                Ok(())
+            } else {
+                Err(std::io::Error::other("not a private directory of ours"))
+            }
+        }
+        Err(e) => Err(e),
+    }
+}
+
+#[cfg(not(unix))]
+fn make_private_dir(_: &std::path::Path) -> std::io::Result<()> {
+    Err(std::io::Error::other("unused"))
 }

@@ -159,11 +159,16 @@ impl<'a> Parser<'a> {
 
     /// "unknown KIND `word`, expected …" for a word; a brace gets the plain "expected …".
     fn unknown(&self, token: Token, kind: &str, expected: &str) -> SceneError {
+        self.unknown_in(token, kind, "", expected)
+    }
+
+    /// Like [`Self::unknown`], naming the enclosing block: "unknown field `x` in Sphere, …".
+    fn unknown_in(&self, token: Token, kind: &str, block: &str, expected: &str) -> SceneError {
         if token.text == "{" || token.text == "}" {
-            self.unexpected(token, expected)
-        } else {
-            self.error(token.location, format!("unknown {kind} {}, expected {expected}", describe(token.text)))
+            return self.unexpected(token, expected);
         }
+        let place = if block.is_empty() { String::new() } else { format!(" in {block}") };
+        self.error(token.location, format!("unknown {kind} {}{place}, expected {expected}", describe(token.text)))
     }
 
     /// The `{` that must follow `keyword`.
@@ -252,7 +257,7 @@ impl<'a> Parser<'a> {
                 return Ok(token.location);
             }
             if !fields.contains(&token.text) {
-                return Err(self.unknown(token, &format!("field in {}", keyword.text), &expected));
+                return Err(self.unknown_in(token, "field", keyword.text, &expected));
             }
             if seen.contains(&token.text) {
                 return Err(self.error(token.location, format!("duplicate field `{}` in {}", token.text, keyword.text)));

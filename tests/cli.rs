@@ -1,0 +1,162 @@
+//! The binary as a user runs it: exit statuses, one-line errors that name the flag or the
+//! file:line:col, no image left behind by a failed run, TGA/PNG by extension, and the
+//! backend choice when no GPU is present.
+
+mod common;
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn raycaster(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_raycaster")).args(args).current_dir(env!("CARGO_MANIFEST_DIR")).output().unwrap()
+}
+
+fn stderr(output: &Output) -> String {
+    String::from_utf8_lossy(&output.stderr).into_owned()
+}
+
+fn path_str(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// The README's first command: a scene of ours rendered from the project root.
+#[test]
+fn renders_an_uncompressed_tga_like_the_course() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("o.tga");
+    let result = raycaster(&["-input", "scenes/spheres_ortho.txt", "-size", "64", "48", "-output", path_str(&out), "--backend", "cpu"]);
+    assert!(result.status.success(), "{}", stderr(&result));
+    let bytes = std::fs::read(&out).unwrap();
+    // TGA header: image type 2 (uncompressed true colour), 64×48, 24 bits per pixel.
+    assert_eq!(bytes[2], 2, "image type");
+    assert_eq!(u16::from_le_bytes([bytes[12], bytes[13]]), 64);
+    assert_eq!(u16::from_le_bytes([bytes[14], bytes[15]]), 48);
+    assert_eq!(bytes[16], 24, "bits per pixel");
+    assert!(bytes.len() >= 18 + 64 * 48 * 3);
+}
+
+#[test]
+fn png_by_extension() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("n.png");
+    let result = raycaster(&["--input", "scenes/spheres_ortho.txt", "--size", "10", "10", "--normals", path_str(&out), "--backend", "cpu"]);
+    assert!(result.status.success(), "{}", stderr(&result));
+    assert_eq!(&std::fs::read(&out).unwrap()[1..4], b"PNG");
+}
+
+/// Mesh paths resolve from the scene's folder, whatever the working directory.
+#[test]
+fn mesh_paths_resolve_from_the_scene_folder() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("o.tga");
+    let scene = common::corpus().join("a2/scene2_10_bunny_1k.txt");
+    let result = raycaster(&["-input", path_str(&scene), "-size", "20", "20", "-output", path_str(&out), "--backend", "cpu"]);
+    assert!(result.status.success(), "{}", stderr(&result));
+    assert!(out.exists());
+}
+
+/// Bad arguments: status 2, one line naming the flag, and no file written.
+#[test]
+fn bad_arguments_exit_2_with_one_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("o.tga");
+    let o = path_str(&out);
+    let cases: [(&[&str], &str); 5] = [
+        (&["-input", "scenes/spheres_ortho.txt", "-size", "0", "5", "-output", o], "-size"),
+        (&["-input", "scenes/spheres_ortho.txt", "-size", "5", "5", "-output", o, "-depth", "3", "1", "d.tga"], "-depth"),
+        (&["-input", "scenes/spheres_ortho.txt", "-size", "5", "5", "-output", o, "-frobnicate"], "-frobnicate"),
+        (&["-input", "scenes/spheres_ortho.txt", "-size", "5", "5"], "-output"),
+        (&["-input", "scenes/spheres_ortho.txt", "-size", "5", "5", "-output", o, "--backend"], "--backend"),
+    ];
+    for (args, flag) in cases {
+        let result = raycaster(args);
+        let message = stderr(&result);
+        assert_eq!(result.status.code(), Some(2), "{args:?}: {message}");
+        assert_eq!(message.trim_end().lines().count(), 1, "{args:?}: {message}");
+        assert!(message.contains(flag), "{args:?}: {message}");
+        assert!(!out.exists(), "{args:?} wrote an image");
+    }
+}
+
+#[test]
+fn help_exits_0() {
+    let result = raycaster(&["--help"]);
+    assert!(result.status.success());
+    assert!(String::from_utf8_lossy(&result.stdout).contains("-shade_back"));
+}
+
+/// A broken scene: non-zero status, the message names file:line:col, no image written.
+#[test]
+fn bad_scene_names_file_line_and_column() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("bad.txt");
+    std::fs::write(&scene, "OrthographicCamera {\n  center 0 0 10\n  direction 0 0 -1\n  up 0 1 0\n  size two\n}\n").unwrap();
+    let out = dir.path().join("o.tga");
+    let result = raycaster(&["-input", path_str(&scene), "-size", "5", "5", "-output", path_str(&out), "--backend", "cpu"]);
+    let message = stderr(&result);
+    assert_eq!(result.status.code(), Some(1), "{message}");
+    assert!(message.contains(&format!("{}:5:8", scene.display())), "{message}");
+    assert!(!out.exists());
+}
+
+/// When one of several images cannot be written, none is: all are encoded to temporary
+/// files first and renamed only when every one is complete.
+#[test]
+fn no_image_is_written_when_another_fails() {
+    let dir = tempfile::tempdir().unwrap();
+    let good = dir.path().join("o.tga");
+    let bad = dir.path().join("missing-folder/n.tga");
+    let result = raycaster(&["-input", "scenes/spheres_ortho.txt", "-size", "8", "8", "-output", path_str(&good), "-normals", path_str(&bad), "--backend", "cpu"]);
+    let message = stderr(&result);
+    assert_eq!(result.status.code(), Some(1), "{message}");
+    assert!(message.contains("missing-folder"), "{message}");
+    assert!(!good.exists(), "the first image was written although the second failed");
+    let leftovers: Vec<_> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
+    assert!(leftovers.is_empty(), "temporary files left behind: {leftovers:?}");
+}
+
+/// With no Vulkan driver: `--backend gpu` fails with a message that says how to get one;
+/// `--backend auto` renders on the CPU and says so on stderr.
+#[test]
+fn without_an_adapter_gpu_fails_and_auto_falls_back() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("o.tga");
+    let run = |backend: &str| {
+        Command::new(env!("CARGO_BIN_EXE_raycaster"))
+            .args(["-input", "scenes/spheres_ortho.txt", "-size", "8", "8", "-output", path_str(&out), "--backend", backend])
+            .current_dir(env!("CARGO_MANIFEST_DIR"))
+            .env("VK_DRIVER_FILES", "/nonexistent/icd.json")
+            .env("VK_ICD_FILENAMES", "/nonexistent/icd.json")
+            .env("WGPU_BACKEND", "vulkan")
+            .output()
+            .unwrap()
+    };
+    let gpu = run("gpu");
+    assert_eq!(gpu.status.code(), Some(1), "{}", stderr(&gpu));
+    assert!(stderr(&gpu).contains("no GPU adapter found"), "{}", stderr(&gpu));
+    assert!(!out.exists());
+    let auto = run("auto");
+    assert!(auto.status.success(), "{}", stderr(&auto));
+    assert!(stderr(&auto).contains("rendering with the CPU reference instead"), "{}", stderr(&auto));
+    assert!(out.exists());
+}
+
+/// The GPU backend through the binary writes the same image as the reference.
+#[test]
+fn gpu_and_cpu_binaries_agree() {
+    if common::gpu().is_none() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let images: Vec<_> = ["gpu", "cpu"]
+        .iter()
+        .map(|backend| {
+            let out = dir.path().join(format!("{backend}.png"));
+            let result = raycaster(&["-input", "scenes/triangles.txt", "-size", "50", "40", "-output", path_str(&out), "--backend", backend]);
+            assert!(result.status.success(), "{}", stderr(&result));
+            raycaster::image_io::read_image(&out).unwrap()
+        })
+        .collect();
+    let diff = common::pixel_diff(&images[0], &images[1]);
+    assert!(diff.off_by_more_than_one <= 2, "{diff:?}");
+}
