@@ -112,7 +112,9 @@ fn encode_to_temp(path: &Path, image: &RgbImage) -> Result<tempfile::NamedTempFi
     let mut out = BufWriter::new(temp.as_file());
     let (w, h) = image.dimensions();
     let result = match format {
-        ImageFormat::Tga => TgaEncoder::new(&mut out).disable_rle().write_image(image.as_raw(), w, h, ExtendedColorType::Rgb8),
+        ImageFormat::Tga => {
+            TgaEncoder::new(&mut out).disable_rle().write_image(image.as_raw(), w, h, ExtendedColorType::Rgb8)
+        }
         ImageFormat::Png => PngEncoder::new(&mut out).write_image(image.as_raw(), w, h, ExtendedColorType::Rgb8),
     };
     result.map_err(|e| fail(e.to_string()))?;
@@ -136,7 +138,5 @@ fn make_readable(_: &tempfile::NamedTempFile) -> std::io::Result<()> {
 
 /// Reads a TGA or PNG image as 8-bit RGB (used by tests and `compare`).
 pub fn read_image(path: &Path) -> Result<RgbImage, ImageError> {
-    image::open(path)
-        .map(|i| i.to_rgb8())
-        .map_err(|e| ImageError { path: path.to_path_buf(), message: e.to_string() })
+    image::open(path).map(|i| i.to_rgb8()).map_err(|e| ImageError { path: path.to_path_buf(), message: e.to_string() })
 }

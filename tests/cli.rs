@@ -24,7 +24,17 @@ fn path_str(p: &Path) -> &str {
 fn renders_an_uncompressed_tga_like_the_course() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("o.tga");
-    let result = raycaster(&["-input", "scenes/spheres_ortho.txt", "-size", "64", "48", "-output", path_str(&out), "--backend", "cpu"]);
+    let result = raycaster(&[
+        "-input",
+        "scenes/spheres_ortho.txt",
+        "-size",
+        "64",
+        "48",
+        "-output",
+        path_str(&out),
+        "--backend",
+        "cpu",
+    ]);
     assert!(result.status.success(), "{}", stderr(&result));
     let bytes = std::fs::read(&out).unwrap();
     // TGA header: image type 2 (uncompressed true colour), 64×48, 24 bits per pixel.
@@ -39,7 +49,17 @@ fn renders_an_uncompressed_tga_like_the_course() {
 fn png_by_extension() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("n.png");
-    let result = raycaster(&["--input", "scenes/spheres_ortho.txt", "--size", "10", "10", "--normals", path_str(&out), "--backend", "cpu"]);
+    let result = raycaster(&[
+        "--input",
+        "scenes/spheres_ortho.txt",
+        "--size",
+        "10",
+        "10",
+        "--normals",
+        path_str(&out),
+        "--backend",
+        "cpu",
+    ]);
     assert!(result.status.success(), "{}", stderr(&result));
     assert_eq!(&std::fs::read(&out).unwrap()[1..4], b"PNG");
 }
@@ -50,7 +70,8 @@ fn mesh_paths_resolve_from_the_scene_folder() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("o.tga");
     let scene = common::corpus().join("a2/scene2_10_bunny_1k.txt");
-    let result = raycaster(&["-input", path_str(&scene), "-size", "20", "20", "-output", path_str(&out), "--backend", "cpu"]);
+    let result =
+        raycaster(&["-input", path_str(&scene), "-size", "20", "20", "-output", path_str(&out), "--backend", "cpu"]);
     assert!(result.status.success(), "{}", stderr(&result));
     assert!(out.exists());
 }
@@ -63,7 +84,10 @@ fn bad_arguments_exit_2_with_one_line() {
     let o = path_str(&out);
     let cases: [(&[&str], &str); 5] = [
         (&["-input", "scenes/spheres_ortho.txt", "-size", "0", "5", "-output", o], "-size"),
-        (&["-input", "scenes/spheres_ortho.txt", "-size", "5", "5", "-output", o, "-depth", "3", "1", "d.tga"], "-depth"),
+        (
+            &["-input", "scenes/spheres_ortho.txt", "-size", "5", "5", "-output", o, "-depth", "3", "1", "d.tga"],
+            "-depth",
+        ),
         (&["-input", "scenes/spheres_ortho.txt", "-size", "5", "5", "-output", o, "-frobnicate"], "-frobnicate"),
         (&["-input", "scenes/spheres_ortho.txt", "-size", "5", "5"], "-output"),
         (&["-input", "scenes/spheres_ortho.txt", "-size", "5", "5", "-output", o, "--backend"], "--backend"),
@@ -90,9 +114,11 @@ fn help_exits_0() {
 fn bad_scene_names_file_line_and_column() {
     let dir = tempfile::tempdir().unwrap();
     let scene = dir.path().join("bad.txt");
-    std::fs::write(&scene, "OrthographicCamera {\n  center 0 0 10\n  direction 0 0 -1\n  up 0 1 0\n  size two\n}\n").unwrap();
+    std::fs::write(&scene, "OrthographicCamera {\n  center 0 0 10\n  direction 0 0 -1\n  up 0 1 0\n  size two\n}\n")
+        .unwrap();
     let out = dir.path().join("o.tga");
-    let result = raycaster(&["-input", path_str(&scene), "-size", "5", "5", "-output", path_str(&out), "--backend", "cpu"]);
+    let result =
+        raycaster(&["-input", path_str(&scene), "-size", "5", "5", "-output", path_str(&out), "--backend", "cpu"]);
     let message = stderr(&result);
     assert_eq!(result.status.code(), Some(1), "{message}");
     assert!(message.contains(&format!("{}:5:8", scene.display())), "{message}");
@@ -106,7 +132,19 @@ fn no_image_is_written_when_another_fails() {
     let dir = tempfile::tempdir().unwrap();
     let good = dir.path().join("o.tga");
     let bad = dir.path().join("missing-folder/n.tga");
-    let result = raycaster(&["-input", "scenes/spheres_ortho.txt", "-size", "8", "8", "-output", path_str(&good), "-normals", path_str(&bad), "--backend", "cpu"]);
+    let result = raycaster(&[
+        "-input",
+        "scenes/spheres_ortho.txt",
+        "-size",
+        "8",
+        "8",
+        "-output",
+        path_str(&good),
+        "-normals",
+        path_str(&bad),
+        "--backend",
+        "cpu",
+    ]);
     let message = stderr(&result);
     assert_eq!(result.status.code(), Some(1), "{message}");
     assert!(message.contains("missing-folder"), "{message}");
@@ -123,7 +161,17 @@ fn without_an_adapter_gpu_fails_and_auto_falls_back() {
     let out = dir.path().join("o.tga");
     let run = |backend: &str| {
         Command::new(env!("CARGO_BIN_EXE_raycaster"))
-            .args(["-input", "scenes/spheres_ortho.txt", "-size", "8", "8", "-output", path_str(&out), "--backend", backend])
+            .args([
+                "-input",
+                "scenes/spheres_ortho.txt",
+                "-size",
+                "8",
+                "8",
+                "-output",
+                path_str(&out),
+                "--backend",
+                backend,
+            ])
             .current_dir(env!("CARGO_MANIFEST_DIR"))
             .env("VK_DRIVER_FILES", "/nonexistent/icd.json")
             .env("VK_ICD_FILENAMES", "/nonexistent/icd.json")
@@ -152,7 +200,17 @@ fn gpu_and_cpu_binaries_agree() {
         .iter()
         .map(|backend| {
             let out = dir.path().join(format!("{backend}.png"));
-            let result = raycaster(&["-input", "scenes/triangles.txt", "-size", "50", "40", "-output", path_str(&out), "--backend", backend]);
+            let result = raycaster(&[
+                "-input",
+                "scenes/triangles.txt",
+                "-size",
+                "50",
+                "40",
+                "-output",
+                path_str(&out),
+                "--backend",
+                backend,
+            ]);
             assert!(result.status.success(), "{}", stderr(&result));
             raycaster::image_io::read_image(&out).unwrap()
         })

@@ -147,7 +147,9 @@ fn binding_strides_match() {
             .find(|(_, v)| v.binding.as_ref().map(|b| (b.group, b.binding)) == Some((0, binding)))
             .unwrap_or_else(|| panic!("no binding {binding}"));
         match m.types[var.ty].inner {
-            naga::TypeInner::Array { stride, .. } => assert_eq!(stride as usize, rust_size, "stride of binding {binding}"),
+            naga::TypeInner::Array { stride, .. } => {
+                assert_eq!(stride as usize, rust_size, "stride of binding {binding}")
+            }
             ref other => panic!("binding {binding} is not an array: {other:?}"),
         }
     }

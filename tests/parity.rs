@@ -48,7 +48,10 @@ fn depth_range(frame: &Frame) -> (f32, f32) {
 
 fn parity(files: &[PathBuf]) {
     let Some(gpu) = common::gpu() else { return };
-    let mut report = vec![format!("{:<44} {:>9} {:>7} {:>9} {:>7} {:>9} {:>7}", "scene (shade_back)", "colour>1", "max", "normal>1", "max", "depth>1", "max")];
+    let mut report = vec![format!(
+        "{:<44} {:>9} {:>7} {:>9} {:>7} {:>9} {:>7}",
+        "scene (shade_back)", "colour>1", "max", "normal>1", "max", "depth>1", "max"
+    )];
     let mut failures = Vec::new();
     for path in files {
         let scene = load_scene(path).unwrap_or_else(|e| panic!("{e}"));
@@ -64,16 +67,23 @@ fn parity(files: &[PathBuf]) {
                 pixel_diff(&depth_image(&ours, min, max), &depth_image(&reference, min, max)),
             ];
             let name = format!("{} ({shade_back})", path.file_name().unwrap().to_string_lossy());
-            let cells: Vec<String> = diffs.iter().map(|d| format!("{:>9} {:>7}", d.off_by_more_than_one, d.max)).collect();
+            let cells: Vec<String> =
+                diffs.iter().map(|d| format!("{:>9} {:>7}", d.off_by_more_than_one, d.max)).collect();
             report.push(format!("{name:<44} {}", cells.join(" ")));
             for (d, what) in diffs.iter().zip(["colour", "normals", "depth"]) {
                 if ((d.pixels - d.off_by_more_than_one) as f64) < MIN_AGREEING_FRACTION * d.pixels as f64 {
-                    failures.push(format!("{name} {what}: {} of {} pixels off by more than 1", d.off_by_more_than_one, d.pixels));
+                    failures.push(format!(
+                        "{name} {what}: {} of {} pixels off by more than 1",
+                        d.off_by_more_than_one, d.pixels
+                    ));
                 }
             }
         }
     }
-    println!("GPU against the f64 reference: pixels off by more than 1 level, and the largest difference\n{}", report.join("\n"));
+    println!(
+        "GPU against the f64 reference: pixels off by more than 1 level, and the largest difference\n{}",
+        report.join("\n")
+    );
     assert!(failures.is_empty(), "{failures:#?}");
 }
 

@@ -4,8 +4,7 @@
 use glam::{DMat4, DVec3};
 use proptest::prelude::*;
 use raycaster::scene::{
-    load_obj, load_scene, parse_obj, parse_scene, Location, Object, Projection, Scene, SceneError, Shape,
-    MAX_NESTING,
+    load_obj, load_scene, parse_obj, parse_scene, Location, Object, Projection, Scene, SceneError, Shape, MAX_NESTING,
 };
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -190,7 +189,10 @@ fn scene2_06_plane_and_scene2_07_triangles() {
     let scene = course_scene("scene2_07_sphere_triangles.txt");
     match &scene.root[2].shape {
         Shape::Triangle { vertices, material } => {
-            assert_eq!(*vertices, [DVec3::new(-2.0, -0.2, 0.0), DVec3::new(2.0, -0.2, 0.0), DVec3::new(0.0, -2.0, 0.0)]);
+            assert_eq!(
+                *vertices,
+                [DVec3::new(-2.0, -0.2, 0.0), DVec3::new(2.0, -0.2, 0.0), DVec3::new(0.0, -2.0, 0.0)]
+            );
             assert_eq!(*material, 2);
         }
         other => panic!("{other:?}"),
@@ -199,9 +201,11 @@ fn scene2_06_plane_and_scene2_07_triangles() {
 
 #[test]
 fn course_meshes_have_one_triangle_per_face_line() {
-    for (scene_name, obj_name) in
-        [("scene2_08_cube.txt", "cube.obj"), ("scene2_09_bunny_200.txt", "bunny_200.obj"), ("scene2_10_bunny_1k.txt", "bunny_1k.obj")]
-    {
+    for (scene_name, obj_name) in [
+        ("scene2_08_cube.txt", "cube.obj"),
+        ("scene2_09_bunny_200.txt", "bunny_200.obj"),
+        ("scene2_10_bunny_1k.txt", "bunny_1k.obj"),
+    ] {
         let scene = course_scene(scene_name);
         let mut object = only_object(&scene);
         while let Shape::Transform { child, .. } = &object.shape {
@@ -348,7 +352,10 @@ fn materials_default_colour_and_phong_warns_once() {
     ));
     let diffuse: Vec<DVec3> = scene.materials.iter().map(|m| m.diffuse).collect();
     assert_eq!(diffuse, vec![DVec3::ONE, DVec3::new(0.1, 0.2, 0.3), DVec3::ONE]);
-    assert_eq!(scene.warnings, vec!["PhongMaterial: specular, reflective and transparent terms are ignored".to_string()]);
+    assert_eq!(
+        scene.warnings,
+        vec!["PhongMaterial: specular, reflective and transparent terms are ignored".to_string()]
+    );
 }
 
 #[test]
@@ -362,9 +369,15 @@ fn objects_fields_in_any_order() {
         "}",
     ]));
     assert_eq!(scene.root.len(), 4);
-    assert!(matches!(scene.root[0].shape, Shape::Sphere { center: DVec3 { x: 1.0, y: 2.0, z: 3.0 }, radius: 2.0, material: 1 }));
+    assert!(matches!(
+        scene.root[0].shape,
+        Shape::Sphere { center: DVec3 { x: 1.0, y: 2.0, z: 3.0 }, radius: 2.0, material: 1 }
+    ));
     assert!(matches!(scene.root[1].shape, Shape::Plane { normal: DVec3 { z: 2.0, .. }, offset: -1.0, material: 1 }));
-    assert!(matches!(scene.root[2].shape, Shape::Triangle { vertices: [DVec3::ZERO, DVec3::X, DVec3::Y], material: 1 }));
+    assert!(matches!(
+        scene.root[2].shape,
+        Shape::Triangle { vertices: [DVec3::ZERO, DVec3::X, DVec3::Y], material: 1 }
+    ));
     assert!(matches!(&scene.root[3].shape, Shape::Group(children) if children.is_empty()));
     assert_eq!(scene.root[1].location, Location { line: 6, col: 1 });
 }
@@ -528,10 +541,23 @@ fn unknown_field_is_named_with_the_expected_ones() {
 #[test]
 fn unknown_object_and_light_and_material() {
     assert_error_at(&with_header(&["Group { numObjects 1", "  Cube { }", "}"]), 5, 3, "unknown object `Cube`");
-    assert_error_at(&format!("{CAMERA}\nLights {{ numLights 1 PointLight {{ }} }}"), 2, 22, "unknown light `PointLight`");
-    assert_error_at(&format!("{CAMERA}\nMaterials {{ numMaterials 1 Metal {{ }} }}"), 2, 28, "unknown material `Metal`");
     assert_error_at(
-        &with_header(&["Group { numObjects 1 MaterialIndex 0", "Transform { Shear 1 Sphere { center 0 0 0 radius 1 } } }"]),
+        &format!("{CAMERA}\nLights {{ numLights 1 PointLight {{ }} }}"),
+        2,
+        22,
+        "unknown light `PointLight`",
+    );
+    assert_error_at(
+        &format!("{CAMERA}\nMaterials {{ numMaterials 1 Metal {{ }} }}"),
+        2,
+        28,
+        "unknown material `Metal`",
+    );
+    assert_error_at(
+        &with_header(&[
+            "Group { numObjects 1 MaterialIndex 0",
+            "Transform { Shear 1 Sphere { center 0 0 0 radius 1 } } }",
+        ]),
         5,
         13,
         "unknown transformation `Shear`",
@@ -552,43 +578,84 @@ fn missing_open_brace() {
 #[test]
 fn bad_numbers() {
     let sphere = |radius: &str| {
-        with_header(&["Group { numObjects 1 MaterialIndex 0", &format!("Sphere {{ center 0 0 0 radius {radius} }}"), "}"])
+        with_header(&[
+            "Group { numObjects 1 MaterialIndex 0",
+            &format!("Sphere {{ center 0 0 0 radius {radius} }}"),
+            "}",
+        ])
     };
     for bad in ["1x", "nan", "inf", "-inf", "1e999", "0x10", "1,5", "."] {
         let error = assert_error_at(&sphere(bad), 5, 30, "expected a number, found");
         assert_eq!(error.message, format!("expected a number, found `{bad}`"));
     }
     assert_error_at(&sphere("}"), 5, 30, "expected a number, found `}`");
-    assert_error_at(&format!("OrthographicCamera {{ center 0 NaN 1"), 1, 31, "expected a number, found `NaN`");
+    assert_error_at("OrthographicCamera { center 0 NaN 1", 1, 31, "expected a number, found `NaN`");
 }
 
 #[test]
 fn counts_are_exact_non_negative_integers() {
     // Fewer objects than declared: at the closing brace.
     assert_error_at(
-        &with_header(&["Group { numObjects 3", "MaterialIndex 0", "Sphere { center 0 0 0 radius 1 }", "Plane { normal 0 1 0 offset 0 }", "}"]),
+        &with_header(&[
+            "Group { numObjects 3",
+            "MaterialIndex 0",
+            "Sphere { center 0 0 0 radius 1 }",
+            "Plane { normal 0 1 0 offset 0 }",
+            "}",
+        ]),
         8,
         1,
         "Group declares numObjects 3 but has 2 objects",
     );
     // More: at the first extra object.
     assert_error_at(
-        &with_header(&["Group { numObjects 1", "MaterialIndex 0", "Sphere { center 0 0 0 radius 1 }", "  Plane { normal 0 1 0 offset 0 }", "}"]),
+        &with_header(&[
+            "Group { numObjects 1",
+            "MaterialIndex 0",
+            "Sphere { center 0 0 0 radius 1 }",
+            "  Plane { normal 0 1 0 offset 0 }",
+            "}",
+        ]),
         7,
         3,
         "Group declares numObjects 1 but has at least 2 objects",
     );
-    assert_error_at(&format!("{CAMERA}\nLights {{ numLights 2 }}"), 2, 22, "Lights declares numLights 2 but has 0 lights");
+    assert_error_at(
+        &format!("{CAMERA}\nLights {{ numLights 2 }}"),
+        2,
+        22,
+        "Lights declares numLights 2 but has 0 lights",
+    );
     assert_error_at(
         &format!("{CAMERA}\nMaterials {{ numMaterials 0 Material {{ }} }}"),
         2,
         28,
         "Materials declares numMaterials 0 but has at least 1 materials",
     );
-    assert_error_at(&format!("{CAMERA}\nGroup {{ numObjects 3.5 }}"), 2, 20, "expected a non-negative integer, found `3.5`");
-    assert_error_at(&format!("{CAMERA}\nGroup {{ numObjects -1 }}"), 2, 20, "expected a non-negative integer, found `-1`");
-    assert_error_at(&format!("{CAMERA}\nGroup {{ numObjects 99999999999999999999999 }}"), 2, 20, "expected a non-negative integer");
-    assert_error_at(&format!("{CAMERA}\nGroup {{ MaterialIndex 0 }}"), 2, 9, "expected `numObjects` after `Group {`, found `MaterialIndex`");
+    assert_error_at(
+        &format!("{CAMERA}\nGroup {{ numObjects 3.5 }}"),
+        2,
+        20,
+        "expected a non-negative integer, found `3.5`",
+    );
+    assert_error_at(
+        &format!("{CAMERA}\nGroup {{ numObjects -1 }}"),
+        2,
+        20,
+        "expected a non-negative integer, found `-1`",
+    );
+    assert_error_at(
+        &format!("{CAMERA}\nGroup {{ numObjects 99999999999999999999999 }}"),
+        2,
+        20,
+        "expected a non-negative integer",
+    );
+    assert_error_at(
+        &format!("{CAMERA}\nGroup {{ MaterialIndex 0 }}"),
+        2,
+        9,
+        "expected `numObjects` after `Group {`, found `MaterialIndex`",
+    );
 }
 
 #[test]
@@ -637,7 +704,11 @@ fn material_index_errors() {
 #[test]
 fn singular_and_non_affine_transforms() {
     let transform = |steps: &str| {
-        with_header(&["Group { numObjects 1 MaterialIndex 0", &format!("  Transform {{ {steps} Sphere {{ center 0 0 0 radius 1 }} }}"), "}"])
+        with_header(&[
+            "Group { numObjects 1 MaterialIndex 0",
+            &format!("  Transform {{ {steps} Sphere {{ center 0 0 0 radius 1 }} }}"),
+            "}",
+        ])
     };
     let error = assert_error_at(&transform("Scale 1 0 1"), 5, 3, "singular transform");
     assert_eq!(error.message, "singular transform (determinant 0)");
@@ -645,10 +716,16 @@ fn singular_and_non_affine_transforms() {
     assert_error_at(&transform("Scale 1e-7 1e-7 1"), 5, 3, "singular transform");
     assert_error_at(&transform("Matrix { 1 0 0 0 0 1 0 0 1 1 0 0 0 0 0 1 }"), 5, 3, "singular transform");
     assert_error_at(&transform("Scale 1e300 1e300 1e300 Scale 1e300 1 1"), 5, 3, "non-finite");
+    assert_error_at(&transform("UniformScale 1e200"), 5, 3, "non-finite");
+    assert_error_at(&transform("UniformScale 1e-200"), 5, 3, "singular transform (determinant 0)");
     assert_error_at(&transform("Matrix { 1 0 0 0 0 1 0 0 0 0 1 0 0 0 1 1 }"), 5, 15, "last row must be 0 0 0 1");
     assert_error_at(&transform("Rotate { 0 0 0 45 }"), 5, 24, "Rotate axis must not be the zero vector");
     assert_error_at(
-        &with_header(&["Group { numObjects 1 MaterialIndex 0", "Transform { Sphere { center 0 0 0 radius 1 } Scale 1 1 1 }", "}"]),
+        &with_header(&[
+            "Group { numObjects 1 MaterialIndex 0",
+            "Transform { Sphere { center 0 0 0 radius 1 } Scale 1 1 1 }",
+            "}",
+        ]),
         5,
         46,
         "expected `}` after the Transform's object, found `Scale`",
@@ -664,6 +741,12 @@ fn degenerate_camera_and_shapes() {
         "up (0 0 2) is parallel to direction (0 0 -1)",
     );
     assert_error_at("OrthographicCamera { direction 0 0 0", 1, 32, "direction must not be the zero vector");
+    assert_error_at(
+        "OrthographicCamera { center 0 0 0 direction 1e-200 0 0 up 0 1 0 size 1 }",
+        1,
+        56,
+        "direction (1e-200 0 0) and up (0 1 0) are too large or too small to normalise",
+    );
     assert_error_at("OrthographicCamera { up 0 0 0", 1, 25, "up must not be the zero vector");
     assert_error_at("OrthographicCamera { size 0", 1, 27, "size must be positive");
     assert_error_at("PerspectiveCamera { angle 180", 1, 27, "angle must be between 0 and 180 degrees");
@@ -679,7 +762,12 @@ fn degenerate_camera_and_shapes() {
     assert_error_at(&object("Sphere { center 0 0 0 radius -1 }"), 5, 30, "radius must be positive, found -1");
     assert_error_at(&object("Plane { normal 0 0 0 offset 1 }"), 5, 16, "plane normal must not be the zero vector");
     assert_error_at(&object("Sphere { center 0 0 0 }"), 5, 23, "Sphere is missing `radius`");
-    assert_error_at(&object("Triangle { vertex0 0 0 0 vertex1 0 0 0 vertex0 1 1 1 }"), 5, 40, "duplicate field `vertex0` in Triangle");
+    assert_error_at(
+        &object("Triangle { vertex0 0 0 0 vertex1 0 0 0 vertex0 1 1 1 }"),
+        5,
+        40,
+        "duplicate field `vertex0` in Triangle",
+    );
     assert_error_at(
         &format!("{CAMERA}\nLights {{ numLights 1 DirectionalLight {{ direction 0 0 0 color 1 1 1 }} }}"),
         2,
@@ -690,7 +778,9 @@ fn degenerate_camera_and_shapes() {
 
 #[test]
 fn obj_file_errors() {
-    let mesh = |path: &str| with_header(&["Group { numObjects 1 MaterialIndex 0", &format!("  TriangleMesh {{ obj_file {path} }}"), "}"]);
+    let mesh = |path: &str| {
+        with_header(&["Group { numObjects 1 MaterialIndex 0", &format!("  TriangleMesh {{ obj_file {path} }}"), "}"])
+    };
     assert_error_at(&mesh("no_such_mesh.obj"), 5, 27, "obj_file `no_such_mesh.obj` not found");
     let start = Instant::now();
     assert_error_at(&mesh("/dev/zero"), 5, 27, "is not a regular file");
@@ -720,20 +810,35 @@ fn unexpected_end_of_file() {
         "unexpected end of file, expected a number",
     );
     assert_eq!(error.message, "unexpected end of file, expected a number");
-    assert_error_at(&format!("{CAMERA}\nGroup {{ numObjects 0 \n  "), 3, 3, "unexpected end of file, expected `}`, MaterialIndex");
+    assert_error_at(
+        &format!("{CAMERA}\nGroup {{ numObjects 0 \n  "),
+        3,
+        3,
+        "unexpected end of file, expected `}`, MaterialIndex",
+    );
     assert_error_at("Background", 1, 11, "unexpected end of file, expected `{` after Background");
 }
 
 #[test]
 fn duplicate_top_level_blocks() {
-    assert_error_at(&format!("{CAMERA}\n{LIGHTS}\n\n  {LIGHTS}"), 4, 3, "duplicate Lights block (the first one is at 2:1)");
+    assert_error_at(
+        &format!("{CAMERA}\n{LIGHTS}\n\n  {LIGHTS}"),
+        4,
+        3,
+        "duplicate Lights block (the first one is at 2:1)",
+    );
     assert_error_at(
         &format!("{CAMERA}\nPerspectiveCamera {{ }}"),
         2,
         1,
         "duplicate camera block (the first one is at 1:1)",
     );
-    assert_error_at(&format!("{CAMERA}\nGroup {{ numObjects 0 }} Group {{ numObjects 0 }}"), 2, 24, "duplicate Group block");
+    assert_error_at(
+        &format!("{CAMERA}\nGroup {{ numObjects 0 }} Group {{ numObjects 0 }}"),
+        2,
+        24,
+        "duplicate Group block",
+    );
 }
 
 #[test]
@@ -768,6 +873,15 @@ fn nested_groups(levels: usize) -> String {
     text
 }
 
+/// The top-level Group holding `levels - 1` nested Transforms around a sphere.
+fn nested_transforms(levels: usize) -> String {
+    let mut text = format!("{CAMERA}\n{MATERIALS}\nGroup {{ numObjects 1 MaterialIndex 0\n");
+    text.push_str(&"Transform { Translate 0 0 1\n".repeat(levels - 1));
+    text.push_str("Sphere { center 0 0 0 radius 1 }\n");
+    text.push_str(&"}\n".repeat(levels));
+    text
+}
+
 fn depth(object: &Object) -> usize {
     let mut depth = 1;
     let mut object = object;
@@ -789,9 +903,13 @@ fn nesting_up_to_the_limit_parses_and_drops_on_a_small_stack() {
         let deepest = parse(&nested_groups(MAX_NESTING));
         let levels = depth(only_object(&deepest));
         drop(deepest);
-        levels
+        let transforms = parse(&nested_transforms(MAX_NESTING));
+        let (matrix, _) = transform_of(only_object(&transforms));
+        let lifted = matrix.transform_point3(DVec3::ZERO);
+        (levels, depth(only_object(&transforms)), lifted)
     });
-    assert_eq!(deepest, MAX_NESTING);
+    assert_eq!(deepest, (MAX_NESTING, MAX_NESTING, DVec3::new(0.0, 0.0, 1.0)));
+    assert_error_at(&nested_transforms(MAX_NESTING + 1), 1003, 1, "nesting too deep");
 }
 
 #[test]
@@ -800,8 +918,10 @@ fn nesting_beyond_the_limit_is_an_error_at_the_keyword_that_exceeds_it() {
 
     let (groups, transforms) = on_small_stack(|| {
         let groups = parse_err(&format!("{CAMERA}\n{}", "Group { numObjects 1\n".repeat(100_000)));
-        let transforms =
-            parse_err(&format!("{CAMERA}\nGroup {{ numObjects 1\n{}", "  Transform { Translate 0 0 0\n".repeat(100_000)));
+        let transforms = parse_err(&format!(
+            "{CAMERA}\nGroup {{ numObjects 1\n{}",
+            "  Transform { Translate 0 0 0\n".repeat(100_000)
+        ));
         (groups, transforms)
     });
     assert_eq!(groups.location, Some(Location { line: 1002, col: 1 }), "{groups}");
@@ -813,21 +933,119 @@ fn nesting_beyond_the_limit_is_an_error_at_the_keyword_that_exceeds_it() {
 // robustness
 
 const VOCABULARY: &[&str] = &[
-    "{", "}", "{", "}", "OrthographicCamera", "PerspectiveCamera", "Lights", "Background", "Materials", "Group",
-    "Material", "PhongMaterial", "DirectionalLight", "numLights", "numMaterials", "numObjects", "MaterialIndex",
-    "Sphere", "Plane", "Triangle", "TriangleMesh", "Transform", "Scale", "UniformScale", "Translate", "XRotate",
-    "YRotate", "ZRotate", "Rotate", "Matrix", "center", "direction", "up", "size", "angle", "color", "ambientLight",
-    "diffuseColor", "specularColor", "exponent", "radius", "normal", "offset", "vertex0", "vertex1", "vertex2",
-    "obj_file", "cube.obj", "/dev/zero", "missing.obj", "0", "1", "1", "2", "3", "-1", "0.5", "-.16", "+2.", "1e-3",
-    "1e999", "-1e308", "nan", "inf", "0x10", "3.5", "180", "18446744073709551616", "4294967296", "1e-320", "#", "\n",
+    "{",
+    "}",
+    "{",
+    "}",
+    "OrthographicCamera",
+    "PerspectiveCamera",
+    "Lights",
+    "Background",
+    "Materials",
+    "Group",
+    "Material",
+    "PhongMaterial",
+    "DirectionalLight",
+    "numLights",
+    "numMaterials",
+    "numObjects",
+    "MaterialIndex",
+    "Sphere",
+    "Plane",
+    "Triangle",
+    "TriangleMesh",
+    "Transform",
+    "Scale",
+    "UniformScale",
+    "Translate",
+    "XRotate",
+    "YRotate",
+    "ZRotate",
+    "Rotate",
+    "Matrix",
+    "center",
+    "direction",
+    "up",
+    "size",
+    "angle",
+    "color",
+    "ambientLight",
+    "diffuseColor",
+    "specularColor",
+    "exponent",
+    "radius",
+    "normal",
+    "offset",
+    "vertex0",
+    "vertex1",
+    "vertex2",
+    "obj_file",
+    "cube.obj",
+    "/dev/zero",
+    "missing.obj",
+    "0",
+    "1",
+    "1",
+    "2",
+    "3",
+    "-1",
+    "0.5",
+    "-.16",
+    "+2.",
+    "1e-3",
+    "1e999",
+    "-1e308",
+    "nan",
+    "inf",
+    "0x10",
+    "3.5",
+    "180",
+    "18446744073709551616",
+    "4294967296",
+    "1e-320",
+    "#",
+    "\n",
 ];
 
 fn soup(words: Vec<&'static str>) -> String {
     words.join(" ")
 }
 
+/// A course scene as words, to mutate.
+fn course_words() -> Vec<String> {
+    let text = std::fs::read_to_string(course_dir().join("scene2_14_axes_cube.txt")).unwrap();
+    text.split_whitespace().map(str::to_string).collect()
+}
+
+/// One edit of a word list: replace, insert or delete at a position (taken modulo the length).
+#[derive(Clone, Debug)]
+enum Edit {
+    Replace(usize, &'static str),
+    Insert(usize, &'static str),
+    Delete(usize),
+}
+
+fn edit_strategy() -> impl Strategy<Value = Edit> {
+    let word = || prop::sample::select(VOCABULARY);
+    prop_oneof![
+        (any::<usize>(), word()).prop_map(|(i, w)| Edit::Replace(i, w)),
+        (any::<usize>(), word()).prop_map(|(i, w)| Edit::Insert(i, w)),
+        any::<usize>().prop_map(Edit::Delete),
+    ]
+}
+
+fn apply(words: &mut Vec<String>, edit: &Edit) {
+    let len = words.len().max(1);
+    match *edit {
+        Edit::Replace(i, w) if !words.is_empty() => words[i % len] = w.to_string(),
+        Edit::Insert(i, w) => words.insert(i % (words.len() + 1), w.to_string()),
+        Edit::Delete(i) if !words.is_empty() => drop(words.remove(i % len)),
+        _ => {}
+    }
+}
+
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(2000))]
+    #![proptest_config(ProptestConfig::with_cases(4000))]
 
     #[test]
     fn arbitrary_bytes_never_panic(bytes in prop::collection::vec(any::<u8>(), 0..512)) {
@@ -847,6 +1065,18 @@ proptest! {
         let result = parse_scene(&text, &course_dir().join("soup.txt"));
         if let Err(error) = result {
             prop_assert!(error.location.is_some() || error.message.contains("camera"));
+        }
+    }
+
+    #[test]
+    fn mutated_course_scenes_never_panic(edits in prop::collection::vec(edit_strategy(), 1..4)) {
+        let mut words = course_words();
+        for edit in &edits {
+            apply(&mut words, edit);
+        }
+        match parse_scene(&words.join(" "), &course_dir().join("mutated.txt")) {
+            Ok(scene) => prop_assert!(scene.camera.basis().is_some()),
+            Err(error) => prop_assert!(error.location.is_some() || error.message.contains("camera")),
         }
     }
 

@@ -32,7 +32,11 @@ fn centre_of_a_lit_sphere() {
     let c = DVec3::new(0.5, 0.6, 0.7);
     let expected = DVec3::new(0.2, 0.3, 0.4) * c + l_dot_n * DVec3::new(0.9, 0.8, 0.7) * c;
     for k in 0..3 {
-        assert!(close(frame.color[centre][k] as f64, expected[k], 1e-6), "channel {k}: {:?} vs {expected}", frame.color[centre]);
+        assert!(
+            close(frame.color[centre][k] as f64, expected[k], 1e-6),
+            "channel {k}: {:?} vs {expected}",
+            frame.color[centre]
+        );
     }
     assert_eq!(frame.normal[centre], [0.0, 0.0, 1.0]);
     // The orthographic ray starts on the image plane z = 10 and meets the pole at z = 1.

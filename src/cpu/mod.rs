@@ -154,7 +154,8 @@ impl<'a> Tracer<'a> {
     /// that the child's t is the world t; the normal comes back as `normalise((M⁻¹)ᵀ·n)`.
     fn intersect_transformed(&self, matrix: &DMat4, child: &Object, ray: &Ray, t_min: f64, closest: &mut Option<Hit>) {
         let inverse = matrix.inverse();
-        let local = Ray { origin: inverse.transform_point3(ray.origin), direction: inverse.transform_vector3(ray.direction) };
+        let local =
+            Ray { origin: inverse.transform_point3(ray.origin), direction: inverse.transform_vector3(ray.direction) };
         let before = *closest;
         self.intersect_object(child, &local, t_min, closest);
         if let Some(hit) = closest.as_mut() {

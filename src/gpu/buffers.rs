@@ -118,7 +118,11 @@ impl SceneBuffers {
         buffers.lights = scene
             .lights
             .iter()
-            .map(|l| GpuLight { to_light: f32x3(-l.direction.normalize()), color: f32x3(l.color), ..Default::default() })
+            .map(|l| GpuLight {
+                to_light: f32x3(-l.direction.normalize()),
+                color: f32x3(l.color),
+                ..Default::default()
+            })
             .collect();
         buffers.params = Params {
             direction: f32x3(rays.direction),

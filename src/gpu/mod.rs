@@ -193,9 +193,8 @@ impl GpuRenderer {
     /// binding limit and our own cap, and the dispatch size limit.
     fn tile_rows(&self, width: u32) -> Result<u32, GpuError> {
         let row_bytes = width as u64 * std::mem::size_of::<PixelOut>() as u64;
-        let budget = MAX_TILE_BYTES
-            .min(self.limits.max_storage_buffer_binding_size as u64)
-            .min(self.limits.max_buffer_size);
+        let budget =
+            MAX_TILE_BYTES.min(self.limits.max_storage_buffer_binding_size as u64).min(self.limits.max_buffer_size);
         let rows = budget / row_bytes;
         let max_groups = self.limits.max_compute_workgroups_per_dimension as u64;
         if rows == 0 || (width as u64).div_ceil(WORKGROUP as u64) > max_groups {
@@ -277,9 +276,11 @@ impl GpuRenderer {
             layout: &self.bind_group_layout,
             entries: &entries,
         });
-        let mut encoder = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("raycast") });
+        let mut encoder =
+            self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("raycast") });
         {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("raycast"), timestamp_writes: None });
+            let mut pass = encoder
+                .begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("raycast"), timestamp_writes: None });
             pass.set_pipeline(pipeline);
             pass.set_bind_group(0, &bind_group, &[]);
             pass.dispatch_workgroups(params.width.div_ceil(WORKGROUP), rows.div_ceil(WORKGROUP), 1);
@@ -332,10 +333,7 @@ fn read_back(device: &wgpu::Device, buffer: &wgpu::Buffer) -> Result<Vec<PixelOu
         let _ = sender.send(result);
     });
     device.poll(wgpu::PollType::wait_indefinitely()).map_err(|e| GpuError::Readback(e.to_string()))?;
-    receiver
-        .recv()
-        .map_err(|e| GpuError::Readback(e.to_string()))?
-        .map_err(|e| GpuError::Readback(e.to_string()))?;
+    receiver.recv().map_err(|e| GpuError::Readback(e.to_string()))?.map_err(|e| GpuError::Readback(e.to_string()))?;
     let pixels = {
         let view = slice.get_mapped_range().map_err(|e| GpuError::Readback(e.to_string()))?;
         bytemuck::cast_slice::<u8, PixelOut>(&view).to_vec()

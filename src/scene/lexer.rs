@@ -190,10 +190,7 @@ mod tests {
 
     #[test]
     fn comments_crlf_and_unicode_columns() {
-        assert_eq!(
-            tokens("# title\r\nä b#c d\r\n  e # f\n"),
-            vec![("ä", 2, 1), ("b", 2, 3), ("e", 3, 3)]
-        );
+        assert_eq!(tokens("# title\r\nä b#c d\r\n  e # f\n"), vec![("ä", 2, 1), ("b", 2, 3), ("e", 3, 3)]);
     }
 
     #[test]
@@ -206,10 +203,15 @@ mod tests {
 
     #[test]
     fn c_style_decimals() {
-        for (text, value) in [("5", 5.0), ("-.16", -0.16), ("+2.", 2.0), ("1e-3", 1e-3), ("2.5E+2", 250.0), ("-0", -0.0)] {
+        for (text, value) in
+            [("5", 5.0), ("-.16", -0.16), ("+2.", 2.0), ("1e-3", 1e-3), ("2.5E+2", 250.0), ("-0", -0.0)]
+        {
             assert_eq!(parse_decimal(text), Some(value), "{text}");
         }
-        for text in ["", ".", "-", "e5", "1e", "1e+", "nan", "inf", "-inf", "NaN", "infinity", "0x10", "1e999", "1.2.3", "1,5", "5a", "--1", " 1"] {
+        for text in [
+            "", ".", "-", "e5", "1e", "1e+", "nan", "inf", "-inf", "NaN", "infinity", "0x10", "1e999", "1.2.3", "1,5",
+            "5a", "--1", " 1",
+        ] {
             assert_eq!(parse_decimal(text), None, "{text}");
         }
     }

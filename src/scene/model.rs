@@ -108,14 +108,31 @@ pub struct Object {
 #[derive(Clone, Debug)]
 pub enum Shape {
     Group(Vec<Object>),
-    Sphere { center: DVec3, radius: f64, material: u32 },
+    Sphere {
+        center: DVec3,
+        radius: f64,
+        material: u32,
+    },
     /// `normal` as written (not normalised; the parser rejects a zero normal).
-    Plane { normal: DVec3, offset: f64, material: u32 },
-    Triangle { vertices: [DVec3; 3], material: u32 },
-    Mesh { mesh: Arc<Mesh>, material: u32 },
+    Plane {
+        normal: DVec3,
+        offset: f64,
+        material: u32,
+    },
+    Triangle {
+        vertices: [DVec3; 3],
+        material: u32,
+    },
+    Mesh {
+        mesh: Arc<Mesh>,
+        material: u32,
+    },
     /// `matrix` maps the child's points to the parent's: `p_parent = matrix · p_child`.
     /// Always invertible (the parser rejects singular transforms).
-    Transform { matrix: DMat4, child: Box<Object> },
+    Transform {
+        matrix: DMat4,
+        child: Box<Object>,
+    },
 }
 
 /// A triangle mesh read from an OBJ file.

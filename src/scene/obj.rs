@@ -60,7 +60,9 @@ fn words(line_number: u32, line: &str) -> impl Iterator<Item = Word<'_>> {
 impl ObjReader<'_> {
     fn line(&mut self, line_number: u32, line: &str) -> Result<(), SceneError> {
         let mut words = words(line_number, line);
-        let Some(keyword) = words.next() else { return Ok(()) };
+        let Some(keyword) = words.next() else {
+            return Ok(());
+        };
         match keyword.text {
             "v" => self.vertex(&keyword, words),
             "f" => self.face(&keyword, words),
@@ -138,10 +140,9 @@ impl ObjReader<'_> {
     fn check_forward_refs(&self) -> Result<(), SceneError> {
         let total = self.positions.len() as u64;
         match self.forward_refs.iter().find(|(index, _)| *index > total) {
-            Some((index, location)) => Err(self.error(
-                *location,
-                format!("vertex index {index} out of range: the file has {total} vertices"),
-            )),
+            Some((index, location)) => {
+                Err(self.error(*location, format!("vertex index {index} out of range: the file has {total} vertices")))
+            }
             None => Ok(()),
         }
     }
@@ -166,7 +167,8 @@ mod tests {
 
     #[test]
     fn fans_slashes_negative_and_forward_indices() {
-        let mesh = parse("# c\r\nv 0 0 0\r\nvn 0 0 1\nv 1 0 0 1\nv 1 1 0\nf 1/1/1 2//1 3/4 4\nf -1 -2 -3\nv 0 1 0\n").unwrap();
+        let mesh =
+            parse("# c\r\nv 0 0 0\r\nvn 0 0 1\nv 1 0 0 1\nv 1 1 0\nf 1/1/1 2//1 3/4 4\nf -1 -2 -3\nv 0 1 0\n").unwrap();
         assert_eq!(mesh.positions.len(), 4);
         assert_eq!(mesh.triangles, vec![[0, 1, 2], [0, 2, 3], [2, 1, 0]]);
     }
@@ -174,7 +176,10 @@ mod tests {
     #[test]
     fn located_errors() {
         let err = |text: &str| parse(text).unwrap_err().to_string();
-        assert_eq!(err("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n"), "m.obj:4:7: vertex index 4 out of range: the file has 3 vertices");
+        assert_eq!(
+            err("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n"),
+            "m.obj:4:7: vertex index 4 out of range: the file has 3 vertices"
+        );
         assert_eq!(err("v 0 0 0\nf 1 -2 1\n"), "m.obj:2:5: vertex index -2 out of range: only 1 vertices read so far");
         assert_eq!(err("v 0 0 0\nf 1 0 1\n"), "m.obj:2:5: vertex index 0 is invalid (OBJ indices start at 1)");
         assert_eq!(err("v 0 0 0\n  f 1 1\n"), "m.obj:2:3: face has 2 vertices, expected at least 3");

@@ -1,15 +1,15 @@
 //! Recursive-descent parser for the scene format (SPEC §2).
 //!
-//! One function per grammar rule. Every error is located at the token that caused it and
+//! One function per grammar rule, except that the one rule that nests (Group/Transform
+//! objects) keeps its open blocks on an explicit stack instead of recursing, so no input
+//! can exhaust the call stack. Every error is located at the token that caused it and
 //! says what was expected and what was found. The parser reads the token stream once; the
 //! only checks deferred to the end are those that need a block written later in the file
 //! (material indices used before the `Materials` block).
 
 use super::error::SceneError;
 use super::lexer::{describe, parse_count, parse_decimal, read_source, Lexer, Token};
-use super::model::{
-    Background, Camera, DirectionalLight, Location, Material, Mesh, Object, Projection, Scene, Shape,
-};
+use super::model::{Background, Camera, DirectionalLight, Location, Material, Mesh, Object, Projection, Scene, Shape};
 use super::obj::load_obj;
 use glam::{DMat3, DMat4, DVec3, DVec4};
 use std::collections::HashMap;
@@ -18,9 +18,9 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 /// The deepest nesting of `Group`/`Transform` blocks accepted (the top-level `Group` is
-/// level 1). Deeper nesting is an error at the keyword that exceeds it, so hostile input
-/// cannot overflow the stack of the recursive parser (or of anything that later walks the
-/// tree recursively).
+/// level 1). Deeper nesting is an error at the keyword that exceeds it. The parser itself
+/// needs no such limit; the code that later walks the tree recursively (drop, clone, the
+/// renderers) does, and 1000 levels fit in a 2 MiB thread stack.
 pub const MAX_NESTING: usize = 1000;
 
 /// Reads the scene file at `path` and parses it with [`parse_scene`].
@@ -43,11 +43,9 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<Scene, SceneError> {
 
 type Result<T, E = SceneError> = std::result::Result<T, E>;
 
-const TOP_LEVEL_BLOCKS: &str =
-    "one of OrthographicCamera, PerspectiveCamera, Lights, Background, Materials, Group";
+const TOP_LEVEL_BLOCKS: &str = "one of OrthographicCamera, PerspectiveCamera, Lights, Background, Materials, Group";
 const OBJECT_KEYWORDS: [&str; 6] = ["Group", "Sphere", "Plane", "Triangle", "TriangleMesh", "Transform"];
-const GROUP_ITEMS: &str =
-    "`}`, MaterialIndex or an object (Group, Sphere, Plane, Triangle, TriangleMesh, Transform)";
+const GROUP_ITEMS: &str = "`}`, MaterialIndex or an object (Group, Sphere, Plane, Triangle, TriangleMesh, Transform)";
 const TRANSFORM_ITEMS: &str = "a transformation (Scale, UniformScale, Translate, XRotate, YRotate, \
      ZRotate, Rotate, Matrix) or an object (Group, Sphere, Plane, Triangle, TriangleMesh, Transform)";
 const PHONG_FIELDS: [&str; 6] =
@@ -78,6 +76,47 @@ enum Compose {
     After(DMat4),
     /// `M = T · M` (`Matrix`, the reference parser's quirk).
     Before(DMat4),
+}
+
+/// A `Group` or `Transform` whose closing brace has not been read yet.
+enum OpenBlock<'a> {
+    Group {
+        keyword: Token<'a>,
+        count: Count<'a>,
+        children: Vec<Object>,
+    },
+    /// `child` is the object once read; only the `}` may follow it.
+    Transform {
+        keyword: Token<'a>,
+        matrix: DMat4,
+        child: Option<Object>,
+    },
+}
+
+impl OpenBlock<'_> {
+    /// Takes in a finished object as the block's next child.
+    fn adopt(&mut self, object: Object) {
+        match self {
+            OpenBlock::Group { children, .. } => children.push(object),
+            OpenBlock::Transform { child, .. } => *child = Some(object),
+        }
+    }
+}
+
+/// The start of an object: finished if it is a leaf, still open if it is a block.
+enum Begun<'a> {
+    Leaf(Object),
+    Block(OpenBlock<'a>),
+}
+
+/// What the next item of an open block was.
+enum Item<'a> {
+    /// A `MaterialIndex` or a transformation step, already applied.
+    Consumed,
+    /// An object starts at this keyword.
+    Object(Token<'a>),
+    /// The closing brace: the block is finished as this object.
+    Closed(Object),
 }
 
 /// The declared and actual number of items of a counted block (`numObjects` and friends).
@@ -112,8 +151,6 @@ impl Count<'_> {
 struct Parser<'a> {
     lexer: Lexer<'a>,
     path: &'a Path,
-    /// Current `Group`/`Transform` nesting level.
-    depth: usize,
     /// `numMaterials`, once the `Materials` block has been read.
     material_count: Option<usize>,
     /// The material of the last `MaterialIndex`: it applies to every following object in
@@ -131,7 +168,6 @@ impl<'a> Parser<'a> {
         Parser {
             lexer: Lexer::new(text),
             path,
-            depth: 0,
             material_count: None,
             current_material: None,
             unchecked_material_refs: Vec::new(),
@@ -148,9 +184,9 @@ impl<'a> Parser<'a> {
 
     /// The next token; at the end of the file, an error saying what was `expected`.
     fn expect(&mut self, expected: &str) -> Result<Token<'a>> {
-        self.lexer.next_token().ok_or_else(|| {
-            self.error(self.lexer.location(), format!("unexpected end of file, expected {expected}"))
-        })
+        self.lexer
+            .next_token()
+            .ok_or_else(|| self.error(self.lexer.location(), format!("unexpected end of file, expected {expected}")))
     }
 
     fn unexpected(&self, token: Token, expected: &str) -> SceneError {
@@ -212,7 +248,7 @@ impl<'a> Parser<'a> {
     fn positive(&mut self, what: &str) -> Result<f64> {
         let (value, location) = self.number()?;
         if value <= 0.0 {
-            return Err(self.error(location, format!("{what} must be positive, found {value}")));
+            return Err(self.error(location, format!("{what} must be positive, found {}", show1(value))));
         }
         Ok(value)
     }
@@ -301,7 +337,7 @@ impl<'a> Parser<'a> {
             }
             "Group" => {
                 self.first_of_kind("Group", token, &mut blocks.seen)?;
-                if let Shape::Group(children) = self.group(token)?.shape {
+                if let Shape::Group(children) = self.object(token)?.shape {
                     blocks.root = Some(children);
                 }
             }
@@ -328,7 +364,8 @@ impl<'a> Parser<'a> {
         let materials = blocks.materials.unwrap_or_default();
         self.check_material_refs(materials.len())?;
         let lights = blocks.lights.unwrap_or_default();
-        let mut background = blocks.background.unwrap_or(BackgroundBlock { background: Background::default(), ambient_given: false });
+        let mut background =
+            blocks.background.unwrap_or(BackgroundBlock { background: Background::default(), ambient_given: false });
         if lights.is_empty() {
             self.warnings.push(no_lights_warning(&background));
             background.background.ambient = DVec3::ONE;
@@ -386,10 +423,7 @@ impl<'a> Parser<'a> {
             location: keyword.location,
         };
         if camera.basis().is_none() {
-            return Err(self.error(
-                up_location,
-                format!("up ({}) is parallel to direction ({})", show(camera.up), show(camera.direction)),
-            ));
+            return Err(self.error(up_location, degenerate_camera_message(&camera)));
         }
         Ok(camera)
     }
@@ -398,7 +432,9 @@ impl<'a> Parser<'a> {
     fn field_of_view(&mut self) -> Result<f64> {
         let (degrees, location) = self.number()?;
         if !(degrees > 0.0 && degrees < 180.0) {
-            return Err(self.error(location, format!("angle must be between 0 and 180 degrees, found {degrees}")));
+            return Err(
+                self.error(location, format!("angle must be between 0 and 180 degrees, found {}", show1(degrees)))
+            );
         }
         Ok(degrees.to_radians())
     }
@@ -411,7 +447,10 @@ impl<'a> Parser<'a> {
         loop {
             let token = self.expect(ITEMS)?;
             match token.text {
-                "}" => return self.check_shortfall(&count, token).map(|()| lights),
+                "}" => {
+                    self.check_shortfall(&count, token)?;
+                    return Ok(lights);
+                }
                 "DirectionalLight" => {
                     self.check_extra(&mut count, token)?;
                     lights.push(self.directional_light(token)?);
@@ -508,33 +547,112 @@ impl<'a> Parser<'a> {
 
     // ---- objects ----
 
-    /// Enters a `Group` or `Transform`, refusing to nest deeper than [`MAX_NESTING`].
-    fn enter(&mut self, keyword: Token) -> Result<()> {
-        self.depth += 1;
-        if self.depth > MAX_NESTING {
-            return Err(self.error(
-                keyword.location,
-                format!("nesting too deep: more than {MAX_NESTING} levels of Group/Transform"),
-            ));
+    /// OBJECT, starting at `keyword` (one of [`OBJECT_KEYWORDS`]).
+    ///
+    /// Groups and Transforms nest, which makes this the one rule that would recurse without
+    /// bound. It keeps the open blocks on an explicit stack instead, so nesting costs heap,
+    /// not call stack, at any optimisation level. [`MAX_NESTING`] still applies: the tree is
+    /// dropped, cloned and rendered recursively later.
+    fn object(&mut self, keyword: Token<'a>) -> Result<Object> {
+        let mut current = match self.begin_object(keyword, 1)? {
+            Begun::Leaf(object) => return Ok(object),
+            Begun::Block(block) => block,
+        };
+        let mut ancestors: Vec<OpenBlock<'a>> = Vec::new();
+        loop {
+            let finished = match self.next_item(&mut current)? {
+                Item::Consumed => continue,
+                Item::Object(token) => match self.begin_object(token, ancestors.len() + 2)? {
+                    Begun::Leaf(object) => object,
+                    Begun::Block(block) => {
+                        ancestors.push(std::mem::replace(&mut current, block));
+                        continue;
+                    }
+                },
+                Item::Closed(object) => match ancestors.pop() {
+                    None => return Ok(object),
+                    Some(parent) => {
+                        current = parent;
+                        object
+                    }
+                },
+            };
+            current.adopt(finished);
         }
-        Ok(())
     }
 
-    /// An OBJECT; `keyword` is one of [`OBJECT_KEYWORDS`].
-    fn object(&mut self, keyword: Token<'a>) -> Result<Object> {
-        let shape = match keyword.text {
-            "Group" => return self.group(keyword),
-            "Transform" => return self.transform(keyword),
-            _ => {
-                let material = self.material_for(keyword)?;
-                match keyword.text {
-                    "Sphere" => self.sphere(keyword, material)?,
-                    "Plane" => self.plane(keyword, material)?,
-                    "Triangle" => self.triangle(keyword, material)?,
-                    "TriangleMesh" => self.triangle_mesh(keyword, material)?,
-                    _ => return Err(self.unknown(keyword, "object", GROUP_ITEMS)),
+    /// Reads the start of the object at `keyword`, which will sit at nesting `level`: a leaf
+    /// is read whole, a `Group` or `Transform` up to its first item.
+    fn begin_object(&mut self, keyword: Token<'a>, level: usize) -> Result<Begun<'a>> {
+        let block = match keyword.text {
+            "Group" | "Transform" if level > MAX_NESTING => {
+                return Err(self.error(
+                    keyword.location,
+                    format!("nesting too deep: more than {MAX_NESTING} levels of Group/Transform"),
+                ))
+            }
+            "Group" => {
+                self.open(keyword)?;
+                let count = self.count_field(keyword, "numObjects", "objects")?;
+                OpenBlock::Group { keyword, count, children: Vec::new() }
+            }
+            "Transform" => {
+                self.open(keyword)?;
+                OpenBlock::Transform { keyword, matrix: DMat4::IDENTITY, child: None }
+            }
+            _ => return Ok(Begun::Leaf(self.leaf(keyword)?)),
+        };
+        Ok(Begun::Block(block))
+    }
+
+    /// Reads the next item of an open `Group` or `Transform`.
+    fn next_item(&mut self, block: &mut OpenBlock<'a>) -> Result<Item<'a>> {
+        match block {
+            OpenBlock::Group { keyword, count, children } => {
+                let token = self.expect(GROUP_ITEMS)?;
+                match token.text {
+                    "}" => {
+                        self.check_shortfall(count, token)?;
+                        let shape = Shape::Group(std::mem::take(children));
+                        Ok(Item::Closed(Object { shape, location: keyword.location }))
+                    }
+                    "MaterialIndex" => self.material_index().map(|()| Item::Consumed),
+                    text if OBJECT_KEYWORDS.contains(&text) => {
+                        self.check_extra(count, token)?;
+                        Ok(Item::Object(token))
+                    }
+                    _ => Err(self.unknown(token, "object", GROUP_ITEMS)),
                 }
             }
+            OpenBlock::Transform { keyword, matrix, child } => {
+                if let Some(object) = child.take() {
+                    self.punctuation("}", "`}` after the Transform's object")?;
+                    let shape = Shape::Transform { matrix: *matrix, child: Box::new(object) };
+                    return Ok(Item::Closed(Object { shape, location: keyword.location }));
+                }
+                let token = self.expect(TRANSFORM_ITEMS)?;
+                if OBJECT_KEYWORDS.contains(&token.text) {
+                    self.check_invertible(matrix, *keyword)?;
+                    return Ok(Item::Object(token));
+                }
+                match self.transformation(token)? {
+                    Compose::After(step) => *matrix *= step,
+                    Compose::Before(step) => *matrix = step * *matrix,
+                }
+                Ok(Item::Consumed)
+            }
+        }
+    }
+
+    /// Sphere, Plane, Triangle or TriangleMesh.
+    fn leaf(&mut self, keyword: Token<'a>) -> Result<Object> {
+        let material = self.material_for(keyword)?;
+        let shape = match keyword.text {
+            "Sphere" => self.sphere(keyword, material)?,
+            "Plane" => self.plane(keyword, material)?,
+            "Triangle" => self.triangle(keyword, material)?,
+            "TriangleMesh" => self.triangle_mesh(keyword, material)?,
+            _ => return Err(self.unknown(keyword, "object", GROUP_ITEMS)),
         };
         Ok(Object { shape, location: keyword.location })
     }
@@ -543,30 +661,6 @@ impl<'a> Parser<'a> {
         self.current_material.ok_or_else(|| {
             self.error(keyword.location, format!("{} before any MaterialIndex: objects need a material", keyword.text))
         })
-    }
-
-    fn group(&mut self, keyword: Token<'a>) -> Result<Object> {
-        self.enter(keyword)?;
-        self.open(keyword)?;
-        let mut count = self.count_field(keyword, "numObjects", "objects")?;
-        let mut children = Vec::new();
-        loop {
-            let token = self.expect(GROUP_ITEMS)?;
-            match token.text {
-                "}" => {
-                    self.check_shortfall(&count, token)?;
-                    break;
-                }
-                "MaterialIndex" => self.material_index()?,
-                text if OBJECT_KEYWORDS.contains(&text) => {
-                    self.check_extra(&mut count, token)?;
-                    children.push(self.object(token)?);
-                }
-                _ => return Err(self.unknown(token, "object", GROUP_ITEMS)),
-            }
-        }
-        self.depth -= 1;
-        Ok(Object { shape: Shape::Group(children), location: keyword.location })
     }
 
     /// `MaterialIndex I`: the material of every object that follows in the file.
@@ -690,26 +784,6 @@ impl<'a> Parser<'a> {
         Err(self.error(token.location, message))
     }
 
-    fn transform(&mut self, keyword: Token<'a>) -> Result<Object> {
-        self.enter(keyword)?;
-        self.open(keyword)?;
-        let mut matrix = DMat4::IDENTITY;
-        let child = loop {
-            let token = self.expect(TRANSFORM_ITEMS)?;
-            if OBJECT_KEYWORDS.contains(&token.text) {
-                self.check_invertible(&matrix, keyword)?;
-                break self.object(token)?;
-            }
-            match self.transformation(token)? {
-                Compose::After(step) => matrix *= step,
-                Compose::Before(step) => matrix = step * matrix,
-            }
-        };
-        self.punctuation("}", "`}` after the Transform's object")?;
-        self.depth -= 1;
-        Ok(Object { shape: Shape::Transform { matrix, child: Box::new(child) }, location: keyword.location })
-    }
-
     fn transformation(&mut self, token: Token<'a>) -> Result<Compose> {
         let step = match token.text {
             "Scale" => DMat4::from_scale(self.vec3()?.0),
@@ -732,9 +806,9 @@ impl<'a> Parser<'a> {
         let (degrees, _) = self.number()?;
         self.punctuation("}", "`}` after the Rotate angle")?;
         // Dividing by the largest component first keeps huge axes from overflowing.
-        let axis = (axis / axis.abs().max_element()).try_normalize().ok_or_else(|| {
-            self.error(axis_location, "Rotate axis must not be the zero vector")
-        })?;
+        let axis = (axis / axis.abs().max_element())
+            .try_normalize()
+            .ok_or_else(|| self.error(axis_location, "Rotate axis must not be the zero vector"))?;
         Ok(DMat4::from_axis_angle(axis, degrees.to_radians()))
     }
 
@@ -765,21 +839,40 @@ impl<'a> Parser<'a> {
     }
 }
 
-/// Why `matrix` cannot be inverted reliably, if it cannot: non-finite entries, or a linear
-/// part whose determinant is 0 or tiny relative to its largest entry (|det| ≤ 1e-12·max³;
-/// computed on the matrix divided by max, so large scales cannot overflow).
+/// Why `matrix` cannot be inverted reliably, if it cannot: a linear part whose determinant
+/// is 0 or tiny relative to its largest entry (|det| ≤ 1e-12·max³, tested on the matrix
+/// divided by max so that the test itself cannot overflow), or entries or a determinant
+/// that f64 cannot hold (the renderers compute `M⁻¹` through `1/det`).
 fn singularity(matrix: &DMat4) -> Option<String> {
-    if !matrix.is_finite() {
-        return Some("transform has non-finite entries (it overflows)".to_string());
-    }
     let linear = DMat3::from_mat4(*matrix);
-    let largest = linear.to_cols_array().iter().fold(0.0_f64, |m, v| m.max(v.abs()));
     let determinant = linear.determinant();
+    if !matrix.is_finite() || !determinant.is_finite() {
+        return Some("transform overflows: its entries or determinant are non-finite".to_string());
+    }
+    let largest = linear.to_cols_array().iter().fold(0.0_f64, |m, v| m.max(v.abs()));
     if largest == 0.0 || determinant == 0.0 {
         return Some("singular transform (determinant 0)".to_string());
     }
     let relative = (linear * (1.0 / largest)).determinant();
-    (relative.abs() <= 1e-12).then(|| format!("singular transform (determinant {determinant:e}, too close to 0)"))
+    let invertible = relative.abs() > 1e-12 && (1.0 / determinant).is_finite();
+    (!invertible).then(|| format!("singular transform (determinant {determinant:e}, too close to 0)"))
+}
+
+/// Why [`Camera::basis`] failed: almost always `up` ∥ `direction`; otherwise (both checked
+/// after scaling to unit size, so extremes cannot hide the answer) a vector f64 cannot
+/// normalise, such as `1e-200 0 0`.
+fn degenerate_camera_message(camera: &Camera) -> String {
+    let unit_scale = |v: DVec3| v / v.abs().max_element();
+    let (up, direction) = (unit_scale(camera.up), unit_scale(camera.direction));
+    if up.cross(direction).length() <= 1e-12 * up.length() {
+        format!("up ({}) is parallel to direction ({})", show(camera.up), show(camera.direction))
+    } else {
+        format!(
+            "direction ({}) and up ({}) are too large or too small to normalise",
+            show(camera.direction),
+            show(camera.up)
+        )
+    }
 }
 
 fn no_lights_warning(background: &BackgroundBlock) -> String {
@@ -791,9 +884,19 @@ fn no_lights_warning(background: &BackgroundBlock) -> String {
 }
 
 fn show(v: DVec3) -> String {
-    format!("{} {} {}", v.x, v.y, v.z)
+    format!("{} {} {}", show1(v.x), show1(v.y), show1(v.z))
 }
 
 fn show4(v: DVec4) -> String {
-    format!("{} {} {} {}", v.x, v.y, v.z, v.w)
+    format!("{} {} {} {}", show1(v.x), show1(v.y), show1(v.z), show1(v.w))
+}
+
+/// A number as a person would write it in the file: plain, or with an exponent when plain
+/// notation would run to dozens of digits.
+fn show1(x: f64) -> String {
+    if x != 0.0 && !(1e-4..1e15).contains(&x.abs()) {
+        format!("{x:e}")
+    } else {
+        format!("{x}")
+    }
 }
