@@ -3,6 +3,7 @@
 //! order. Errors are one line naming the flag; the binary exits with status 2 on them.
 
 use crate::image_io::ImageFormat;
+use crate::render::{SphereTest, TriangleTest};
 use std::ffi::OsString;
 use std::fmt;
 use std::path::PathBuf;
@@ -15,8 +16,9 @@ pub const MAX_PIXELS: u64 = 1 << 28;
 pub const USAGE: &str = "\
 raycaster: render an MIT 6.837 scene file on the GPU (wgpu) or with the f64 CPU reference
 
-Usage: raycaster -input SCENE -size W H [-output FILE] [-normals FILE] [-depth MIN MAX FILE]
-                 [-shade_back] [--backend gpu|cpu|auto]
+Usage: raycaster [compare] -input SCENE -size W H [-output FILE] [-normals FILE]
+                 [-depth MIN MAX FILE] [-shade_back] [--backend gpu|cpu|auto]
+                 [--triangle-test cramer|moller|watertight] [--sphere-test naive|robust]
 
   -input FILE            scene file (obj_file paths resolve from its folder)
   -size W H              image size in pixels
@@ -26,7 +28,15 @@ Usage: raycaster -input SCENE -size W H [-output FILE] [-normals FILE] [-depth M
   -shade_back            shade back-facing hits as if they faced the viewer
   --backend B            gpu, cpu (the f64 reference) or auto (default: the GPU if one is
                          found, else the CPU with a notice)
+  --triangle-test T      the GPU's ray/triangle test (default watertight)
+  --sphere-test S        the GPU's ray/sphere test (default robust)
   -h, --help             this text
+
+raycaster compare ... [--max-diff-pixels N]
+  Renders the outputs named with the GPU and with the f64 reference, writes no file, and
+  prints their differences per output: pixels more than 1 level apart, hit/miss
+  disagreements, depth and normal errors, NaN/inf counts. Exits 1 when an output has more
+  than N pixels off by more than 1 level, or the GPU produced NaN or infinity.
 
 Flags take one or two dashes; `-shade_back` and `--shade-back` are the same.
 At least one of -output, -normals, -depth is required.";
@@ -51,6 +61,8 @@ pub struct RenderArgs {
     pub depth: Option<DepthArgs>,
     pub shade_back: bool,
     pub backend: BackendChoice,
+    pub triangle_test: TriangleTest,
+    pub sphere_test: SphereTest,
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -63,6 +75,11 @@ pub struct DepthArgs {
 #[derive(Clone, Debug, PartialEq)]
 pub enum Command {
     Render(RenderArgs),
+    /// `raycaster compare`: GPU against the reference, nothing written.
+    Compare {
+        args: RenderArgs,
+        max_diff_pixels: Option<u64>,
+    },
     Help,
 }
 
@@ -85,7 +102,11 @@ where
     S: Into<OsString>,
 {
     let args: Vec<OsString> = args.into_iter().map(Into::into).collect();
-    let mut values = Values { args: &args, next: 0 };
+    let compare = args.first().is_some_and(|a| a == "compare");
+    let mut values = Values { args: &args, next: usize::from(compare) };
+    let mut max_diff_pixels = None;
+    let mut triangle_test = TriangleTest::default();
+    let mut sphere_test = SphereTest::default();
     let mut input = None;
     let mut size = None;
     let (mut output, mut normals, mut depth) = (None, None, None);
@@ -121,6 +142,17 @@ where
             }
             "shade_back" => shade_back = true,
             "backend" => backend = values.backend(&text)?,
+            "triangle_test" => triangle_test = values.choice(&text, &TriangleTest::ALL.map(|t| (t.name(), t)))?,
+            "sphere_test" => sphere_test = values.choice(&text, &SphereTest::ALL.map(|t| (t.name(), t)))?,
+            "max_diff_pixels" if compare => {
+                let value = values.take(&text, "a number of pixels")?;
+                let text_value = value.to_string_lossy();
+                max_diff_pixels = Some(
+                    text_value
+                        .parse::<u64>()
+                        .map_err(|_| UsageError(format!("{text}: '{text_value}' is not a whole number of pixels")))?,
+                );
+            }
             _ => return Err(UsageError(format!("unknown flag '{text}'"))),
         }
     }
@@ -129,7 +161,12 @@ where
     if output.is_none() && normals.is_none() && depth.is_none() {
         return Err(UsageError("nothing to write: give -output, -normals or -depth".into()));
     }
-    Ok(Command::Render(RenderArgs { input, width, height, output, normals, depth, shade_back, backend }))
+    let args =
+        RenderArgs { input, width, height, output, normals, depth, shade_back, backend, triangle_test, sphere_test };
+    if compare {
+        return Ok(Command::Compare { args, max_diff_pixels });
+    }
+    Ok(Command::Render(args))
 }
 
 /// `-shade_back`, `--shade-back` → `shade_back`; `None` for something that is not a flag
@@ -216,13 +253,19 @@ impl Values<'_> {
     }
 
     fn backend(&mut self, flag: &str) -> Result<BackendChoice, UsageError> {
-        let value = self.take(flag, "gpu, cpu or auto")?;
-        match value.to_string_lossy().as_ref() {
-            "gpu" => Ok(BackendChoice::Gpu),
-            "cpu" => Ok(BackendChoice::Cpu),
-            "auto" => Ok(BackendChoice::Auto),
-            other => Err(UsageError(format!("{flag}: '{other}' is not one of gpu, cpu, auto"))),
-        }
+        self.choice(flag, &[("gpu", BackendChoice::Gpu), ("cpu", BackendChoice::Cpu), ("auto", BackendChoice::Auto)])
+    }
+
+    /// One of a fixed set of words.
+    fn choice<T: Copy>(&mut self, flag: &str, choices: &[(&str, T)]) -> Result<T, UsageError> {
+        let names: Vec<&str> = choices.iter().map(|(name, _)| *name).collect();
+        let value = self.take(flag, &names.join(", "))?;
+        let text = value.to_string_lossy();
+        choices
+            .iter()
+            .find(|(name, _)| *name == text)
+            .map(|(_, v)| *v)
+            .ok_or_else(|| UsageError(format!("{flag}: '{text}' is not one of {}", names.join(", "))))
     }
 }
 
@@ -265,6 +308,27 @@ mod tests {
     fn negative_depth_range_is_values_not_flags() {
         let args = render("-input s -size 1 1 -depth -5 -1.5 d.tga");
         assert_eq!(args.depth, Some(DepthArgs { min: -5.0, max: -1.5, path: "d.tga".into() }));
+    }
+
+    #[test]
+    fn kernel_variants_and_compare() {
+        let args = render("-input s -size 1 1 -output o.tga --triangle-test moller --sphere-test naive");
+        assert_eq!((args.triangle_test, args.sphere_test), (TriangleTest::Moller, SphereTest::Naive));
+        let default = render("-input s -size 1 1 -output o.tga");
+        assert_eq!((default.triangle_test, default.sphere_test), (TriangleTest::Watertight, SphereTest::Robust));
+        match parse("compare -input s -size 1 1 -normals n.tga --max-diff-pixels 7") {
+            Ok(Command::Compare { args, max_diff_pixels }) => {
+                assert_eq!(max_diff_pixels, Some(7));
+                assert_eq!(args.normals, Some(PathBuf::from("n.tga")));
+            }
+            other => panic!("{other:?}"),
+        }
+        // Only compare takes --max-diff-pixels.
+        assert!(parse("-input s -size 1 1 -output o.tga --max-diff-pixels 7").is_err());
+        assert!(parse("-input s -size 1 1 -output o.tga --triangle-test fast")
+            .unwrap_err()
+            .0
+            .contains("cramer, moller, watertight"));
     }
 
     #[test]

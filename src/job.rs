@@ -27,6 +27,8 @@ pub fn options_for(args: &RenderArgs) -> RenderOptions {
         normals: args.normals.is_some(),
         depth: args.depth.is_some(),
         shade_back: args.shade_back,
+        triangle_test: args.triangle_test,
+        sphere_test: args.sphere_test,
     }
 }
 
@@ -53,4 +55,34 @@ pub fn render_scene(scene: &Scene, args: &RenderArgs, backend: &Backend) -> Resu
     }
     image_io::write_images(&images)?;
     Ok(())
+}
+
+/// What `raycaster compare` found: the GPU against the reference, per output.
+#[derive(Clone, Debug)]
+pub struct Comparison {
+    pub errors: Vec<crate::metrics::OutputErrors>,
+    pub warnings: Vec<String>,
+}
+
+impl Comparison {
+    /// Whether the GPU's result passes: no NaN or infinity anywhere, and no output with
+    /// more than `max_diff_pixels` pixels off by more than 1 level (when a limit is given).
+    pub fn passes(&self, max_diff_pixels: Option<u64>) -> bool {
+        self.errors
+            .iter()
+            .all(|e| e.non_finite == 0 && max_diff_pixels.is_none_or(|n| e.image.off_by_more_than_one as u64 <= n))
+    }
+}
+
+/// Renders what `args` names with the GPU and with the f64 reference, writing no file.
+pub fn compare(args: &RenderArgs, gpu: &crate::gpu::GpuRenderer) -> Result<Comparison, Error> {
+    let scene = scene::load_scene(&args.input)?;
+    let options = options_for(args);
+    let ours = gpu.render(&scene, &options)?;
+    let reference = crate::cpu::render(&scene, &options);
+    let depth_range = match &args.depth {
+        Some(d) => (d.min, d.max),
+        None => crate::metrics::depth_range_of(&reference),
+    };
+    Ok(Comparison { errors: crate::metrics::compare_frames(&ours, &reference, depth_range), warnings: scene.warnings })
 }

@@ -13,5 +13,6 @@ pub mod cpu;
 pub mod gpu;
 pub mod image_io;
 pub mod job;
+pub mod metrics;
 pub mod render;
 pub mod scene;

@@ -1,39 +1,30 @@
 //! The `raycaster` command: parses the command line and hands it to the library.
 
 use raycaster::backend::Backend;
-use raycaster::cli::{self, Command};
+use raycaster::cli::{self, BackendChoice, Command, RenderArgs};
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
     give_mesa_a_runtime_dir();
-    let args = match cli::parse_args(std::env::args_os().skip(1)) {
+    match cli::parse_args(std::env::args_os().skip(1)) {
         Ok(Command::Help) => {
             println!("{}", cli::USAGE);
-            return ExitCode::SUCCESS;
+            ExitCode::SUCCESS
         }
-        Ok(Command::Render(args)) => args,
+        Ok(Command::Render(args)) => render(&args),
+        Ok(Command::Compare { args, max_diff_pixels }) => compare(&args, max_diff_pixels),
         Err(e) => {
             eprintln!("raycaster: {e}");
-            return ExitCode::from(2);
+            ExitCode::from(2)
         }
-    };
-    let backend = match Backend::open(args.backend) {
-        Ok((backend, notice)) => {
-            if let Some(notice) = notice {
-                eprintln!("raycaster: {notice}");
-            }
-            backend
-        }
-        Err(e) => {
-            eprintln!("raycaster: {e}");
-            return ExitCode::FAILURE;
-        }
-    };
-    match raycaster::job::run(&args, &backend) {
+    }
+}
+
+fn render(args: &RenderArgs) -> ExitCode {
+    let Some(backend) = open_backend(args.backend) else { return ExitCode::FAILURE };
+    match raycaster::job::run(args, &backend) {
         Ok(warnings) => {
-            for w in warnings {
-                eprintln!("raycaster: warning: {w}");
-            }
+            warn(&warnings);
             ExitCode::SUCCESS
         }
         Err(e) => {
@@ -43,6 +34,52 @@ fn main() -> ExitCode {
     }
 }
 
+fn compare(args: &RenderArgs, max_diff_pixels: Option<u64>) -> ExitCode {
+    let Some(Backend::Gpu(gpu)) = open_backend(BackendChoice::Gpu) else { return ExitCode::FAILURE };
+    match raycaster::job::compare(args, &gpu) {
+        Ok(comparison) => {
+            warn(&comparison.warnings);
+            println!(
+                "{} against the f64 reference ({} triangles, {} spheres):",
+                Backend::Gpu(gpu).name(),
+                args.triangle_test.name(),
+                args.sphere_test.name()
+            );
+            print!("{}", raycaster::metrics::errors_table(&comparison.errors));
+            if comparison.passes(max_diff_pixels) {
+                ExitCode::SUCCESS
+            } else {
+                eprintln!("raycaster: compare: the GPU's result exceeds the limit or holds NaN/infinity");
+                ExitCode::FAILURE
+            }
+        }
+        Err(e) => {
+            eprintln!("raycaster: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn open_backend(choice: BackendChoice) -> Option<Backend> {
+    match Backend::open(choice) {
+        Ok((backend, notice)) => {
+            if let Some(notice) = notice {
+                eprintln!("raycaster: {notice}");
+            }
+            Some(backend)
+        }
+        Err(e) => {
+            eprintln!("raycaster: {e}");
+            None
+        }
+    }
+}
+
+fn warn(warnings: &[String]) {
+    for w in warnings {
+        eprintln!("raycaster: warning: {w}");
+    }
+}
 /// Mesa's Vulkan drivers print "XDG_RUNTIME_DIR is invalid or not set" on every start when
 /// the variable is missing (headless machines, CI). Point it at a private folder of ours
 /// before any thread exists, so the message does not bury our own.

@@ -17,12 +17,71 @@ pub struct RenderOptions {
     pub depth: bool,
     /// Shade back-facing hits as if they faced the viewer (`-shade_back`).
     pub shade_back: bool,
+    /// The GPU kernel's ray/triangle algorithm (the reference always uses its f64 Cramer's rule).
+    pub triangle_test: TriangleTest,
+    /// The GPU kernel's ray/sphere algorithm (the reference always uses its f64 quadratic).
+    pub sphere_test: SphereTest,
+}
+
+/// Ray/triangle algorithms the kernel can be compiled with.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum TriangleTest {
+    /// Cramer's rule, as the seed notes derive it. (Discriminants are the kernel's
+    /// `TRIANGLE_TEST` values.)
+    Cramer = 0,
+    /// Möller–Trumbore (1997).
+    Moller = 1,
+    /// Woop, Benthin, Wald (2013): no ray slips between triangles sharing an edge.
+    #[default]
+    Watertight = 2,
+}
+
+/// Ray/sphere algorithms the kernel can be compiled with.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum SphereTest {
+    /// The textbook quadratic `b² − 4ac`. (Discriminants are the kernel's `SPHERE_TEST`.)
+    Naive = 0,
+    /// Haines et al., Ray Tracing Gems ch. 7: no cancellation far from the sphere.
+    #[default]
+    Robust = 1,
+}
+
+impl TriangleTest {
+    pub const ALL: [TriangleTest; 3] = [TriangleTest::Cramer, TriangleTest::Moller, TriangleTest::Watertight];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            TriangleTest::Cramer => "cramer",
+            TriangleTest::Moller => "moller",
+            TriangleTest::Watertight => "watertight",
+        }
+    }
+}
+
+impl SphereTest {
+    pub const ALL: [SphereTest; 2] = [SphereTest::Naive, SphereTest::Robust];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            SphereTest::Naive => "naive",
+            SphereTest::Robust => "robust",
+        }
+    }
 }
 
 impl RenderOptions {
     /// A render of every output at `width × height`, back faces black.
     pub fn all(width: u32, height: u32) -> Self {
-        RenderOptions { width, height, color: true, normals: true, depth: true, shade_back: false }
+        RenderOptions {
+            width,
+            height,
+            color: true,
+            normals: true,
+            depth: true,
+            shade_back: false,
+            triangle_test: TriangleTest::default(),
+            sphere_test: SphereTest::default(),
+        }
     }
 
     pub fn pixel_count(&self) -> usize {

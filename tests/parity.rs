@@ -6,7 +6,7 @@ mod common;
 
 use common::{corpus, pixel_diff, scenes_dir, PixelDiff};
 use raycaster::image_io::{color_image, depth_image, normals_image};
-use raycaster::render::{Frame, RenderOptions};
+use raycaster::render::RenderOptions;
 use raycaster::scene::load_scene;
 use std::path::{Path, PathBuf};
 
@@ -34,18 +34,6 @@ fn size_for(path: &Path) -> (u32, u32) {
         .unwrap_or((200, 200))
 }
 
-/// Depth range for the depth image: the reference's own hit distances, so the grey ramp
-/// covers what is visible.
-fn depth_range(frame: &Frame) -> (f32, f32) {
-    let hits = frame.depth.iter().zip(&frame.hit).filter(|(_, &h)| h).map(|(&t, _)| t);
-    let (lo, hi) = hits.fold((f32::MAX, f32::MIN), |(lo, hi), t| (lo.min(t), hi.max(t)));
-    if lo < hi {
-        (lo, hi)
-    } else {
-        (lo - 1.0, lo + 1.0)
-    }
-}
-
 fn parity(files: &[PathBuf]) {
     let Some(gpu) = common::gpu() else { return };
     let mut report = vec![format!(
@@ -60,7 +48,7 @@ fn parity(files: &[PathBuf]) {
             let options = RenderOptions { shade_back, ..RenderOptions::all(width, height) };
             let reference = raycaster::cpu::render(&scene, &options);
             let ours = gpu.render(&scene, &options).unwrap();
-            let (min, max) = depth_range(&reference);
+            let (min, max) = raycaster::metrics::depth_range_of(&reference);
             let diffs: [PixelDiff; 3] = [
                 pixel_diff(&color_image(&ours), &color_image(&reference)),
                 pixel_diff(&normals_image(&ours), &normals_image(&reference)),

@@ -9,7 +9,7 @@
 pub mod buffers;
 
 use crate::camera::PrimaryRays;
-use crate::render::{Frame, RenderOptions};
+use crate::render::{Frame, RenderOptions, SphereTest, TriangleTest};
 use crate::scene::Scene;
 use buffers::{PixelOut, SceneBuffers};
 use std::collections::HashMap;
@@ -48,6 +48,8 @@ pub struct KernelConfig {
     pub orthographic: bool,
     pub want_color: bool,
     pub shade_back: bool,
+    pub triangle_test: TriangleTest,
+    pub sphere_test: SphereTest,
 }
 
 impl KernelConfig {
@@ -60,11 +62,13 @@ impl KernelConfig {
             orthographic: buffers.orthographic,
             want_color: options.color,
             shade_back: options.shade_back,
+            triangle_test: options.triangle_test,
+            sphere_test: options.sphere_test,
         }
     }
 
     /// The values for `PipelineCompilationOptions::constants`.
-    pub fn constants(&self) -> [(&'static str, f64); 7] {
+    pub fn constants(&self) -> [(&'static str, f64); 9] {
         let b = |v: bool| if v { 1.0 } else { 0.0 };
         [
             ("HAS_SPHERES", b(self.has_spheres)),
@@ -74,6 +78,8 @@ impl KernelConfig {
             ("ORTHOGRAPHIC", b(self.orthographic)),
             ("WANT_COLOR", b(self.want_color)),
             ("SHADE_BACK", b(self.shade_back)),
+            ("TRIANGLE_TEST", self.triangle_test as u32 as f64),
+            ("SPHERE_TEST", self.sphere_test as u32 as f64),
         ]
     }
 }

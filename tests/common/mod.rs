@@ -31,25 +31,4 @@ pub fn gpu() -> Option<&'static GpuRenderer> {
     }
 }
 
-/// How two 8-bit RGB images of one size differ.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct PixelDiff {
-    pub pixels: usize,
-    /// Pixels with any channel more than 1 level apart.
-    pub off_by_more_than_one: usize,
-    /// The largest channel difference.
-    pub max: u8,
-}
-
-pub fn pixel_diff(a: &image::RgbImage, b: &image::RgbImage) -> PixelDiff {
-    assert_eq!(a.dimensions(), b.dimensions(), "image sizes differ");
-    let mut diff = PixelDiff { pixels: (a.width() * a.height()) as usize, ..Default::default() };
-    for (p, q) in a.pixels().zip(b.pixels()) {
-        let d = (0..3).map(|c| p[c].abs_diff(q[c])).max().unwrap_or(0);
-        diff.max = diff.max.max(d);
-        if d > 1 {
-            diff.off_by_more_than_one += 1;
-        }
-    }
-    diff
-}
+pub use raycaster::metrics::{image_diff as pixel_diff, ImageDiff as PixelDiff};
