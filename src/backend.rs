@@ -5,6 +5,10 @@ use crate::gpu::{GpuError, GpuRenderer};
 use crate::render::{Frame, RenderOptions};
 use crate::scene::Scene;
 
+/// About how many pixels the CPU reference renders per tile (enough rows to keep both cores
+/// busy, few enough to bound memory).
+const CPU_TILE_PIXELS: u32 = 1 << 20;
+
 /// A ready renderer.
 pub enum Backend {
     Gpu(Box<GpuRenderer>),
@@ -29,6 +33,29 @@ impl Backend {
         match self {
             Backend::Gpu(gpu) => gpu.render(scene, options),
             Backend::Cpu => Ok(crate::cpu::render(scene, options)),
+        }
+    }
+
+    /// Renders in tiles of full rows, top first, handing each tile and its first row to
+    /// `on_tile`; see [`GpuRenderer::render_tiles`].
+    pub fn render_tiles<E: From<GpuError>>(
+        &self,
+        scene: &Scene,
+        options: &RenderOptions,
+        mut on_tile: impl FnMut(u32, Frame) -> Result<(), E>,
+    ) -> Result<(), E> {
+        match self {
+            Backend::Gpu(gpu) => gpu.render_tiles(scene, options, on_tile),
+            Backend::Cpu => {
+                let rows_per_tile = (CPU_TILE_PIXELS / options.width).max(1);
+                let mut first_row = 0;
+                while first_row < options.height {
+                    let rows = rows_per_tile.min(options.height - first_row);
+                    on_tile(first_row, crate::cpu::render_rows(scene, options, first_row, rows))?;
+                    first_row += rows;
+                }
+                Ok(())
+            }
         }
     }
 

@@ -4,9 +4,7 @@
 //! course's own images are made.
 
 use crate::render::Frame;
-use image::codecs::png::PngEncoder;
-use image::codecs::tga::TgaEncoder;
-use image::{ExtendedColorType, ImageEncoder, RgbImage};
+use image::RgbImage;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
@@ -78,17 +76,113 @@ pub struct ImageError {
     pub message: String,
 }
 
-/// Writes every `(path, image)` pair, or none of them: each is encoded into a temporary file
-/// beside its destination, and only when all are complete are they renamed into place.
-pub fn write_images(images: &[(PathBuf, RgbImage)]) -> Result<(), ImageError> {
-    let mut pending = Vec::with_capacity(images.len());
-    for (path, image) in images {
-        pending.push((path, encode_to_temp(path, image)?));
+/// An image file being written row by row, top row first, into a temporary file beside its
+/// destination; [`persist_all`] renames finished files into place. Memory stays bounded by
+/// what one call passes in, so any image the formats allow can be written.
+pub struct ImageFile {
+    path: PathBuf,
+    temp: tempfile::NamedTempFile,
+    encoder: Encoder,
+    width: u32,
+    height: u32,
+    rows_written: u32,
+}
+
+enum Encoder {
+    /// Uncompressed true-colour TGA with the course's bottom-left origin: rows are placed
+    /// by seeking, so tiles can arrive top first.
+    Tga(BufWriter<std::fs::File>),
+    Png(png::StreamWriter<'static, BufWriter<std::fs::File>>),
+}
+
+/// TGA header length (no image id, no colour map).
+const TGA_HEADER: u64 = 18;
+
+impl ImageFile {
+    /// Starts `path` (format from its extension) for a `width × height` image.
+    pub fn create(path: &Path, width: u32, height: u32) -> Result<ImageFile, ImageError> {
+        let fail = |message: String| ImageError { path: path.to_path_buf(), message };
+        let format = ImageFormat::from_path(path)
+            .ok_or_else(|| fail("unsupported image format (use a .tga or .png file name)".into()))?;
+        let dir = match path.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p,
+            _ => Path::new("."),
+        };
+        let temp = tempfile::Builder::new()
+            .prefix(".raycaster-")
+            .suffix(".tmp")
+            .tempfile_in(dir)
+            .map_err(|e| fail(format!("cannot create a file in {}: {e}", dir.display())))?;
+        let file = temp.as_file().try_clone().map_err(|e| fail(e.to_string()))?;
+        let encoder = match format {
+            ImageFormat::Tga => Encoder::Tga(tga_start(file, width, height).map_err(|e| fail(e.to_string()))?),
+            ImageFormat::Png => Encoder::Png(png_start(file, width, height).map_err(|e| fail(e.to_string()))?),
+        };
+        Ok(ImageFile { path: path.to_path_buf(), temp, encoder, width, height, rows_written: 0 })
     }
-    for (path, temp) in pending {
-        temp.persist(path).map_err(|e| ImageError { path: path.clone(), message: e.error.to_string() })?;
+
+    /// Appends whole rows of 8-bit RGB, continuing from the last row written.
+    pub fn write_rows(&mut self, rgb: &[u8]) -> Result<(), ImageError> {
+        let row_bytes = self.width as usize * 3;
+        assert_eq!(rgb.len() % row_bytes, 0, "whole rows only");
+        let rows = (rgb.len() / row_bytes) as u32;
+        assert!(self.rows_written + rows <= self.height, "more rows than the image has");
+        let result = match &mut self.encoder {
+            Encoder::Tga(out) => tga_rows(out, rgb, row_bytes, self.height - self.rows_written - rows),
+            Encoder::Png(out) => out.write_all(rgb),
+        };
+        result.map_err(|e| self.error(e.to_string()))?;
+        self.rows_written += rows;
+        Ok(())
+    }
+
+    /// Completes the file; it is still temporary until [`persist_all`].
+    pub fn finish(self) -> Result<FinishedImage, ImageError> {
+        if self.rows_written != self.height {
+            return Err(self.error(format!("only {} of {} rows were written", self.rows_written, self.height)));
+        }
+        let result = match self.encoder {
+            Encoder::Tga(mut out) => out.flush(),
+            Encoder::Png(out) => out.finish().map_err(std::io::Error::other),
+        };
+        let fail = |message: String| ImageError { path: self.path.clone(), message };
+        result.map_err(|e| fail(e.to_string()))?;
+        make_readable(&self.temp).map_err(|e| fail(e.to_string()))?;
+        Ok(FinishedImage { path: self.path, temp: self.temp })
+    }
+
+    fn error(&self, message: String) -> ImageError {
+        ImageError { path: self.path.clone(), message }
+    }
+}
+
+/// A complete image in its temporary file.
+pub struct FinishedImage {
+    path: PathBuf,
+    temp: tempfile::NamedTempFile,
+}
+
+/// Renames every finished image into place. Called only once all are complete, so a failed
+/// run leaves no image half-written (and, short of a failing rename, none at all).
+pub fn persist_all(images: Vec<FinishedImage>) -> Result<(), ImageError> {
+    for image in images {
+        image
+            .temp
+            .persist(&image.path)
+            .map_err(|e| ImageError { path: image.path.clone(), message: e.error.to_string() })?;
     }
     Ok(())
+}
+
+/// Writes every `(path, image)` pair, or none of them (see [`ImageFile`]).
+pub fn write_images(images: &[(PathBuf, RgbImage)]) -> Result<(), ImageError> {
+    let mut finished = Vec::with_capacity(images.len());
+    for (path, image) in images {
+        let mut file = ImageFile::create(path, image.width(), image.height())?;
+        file.write_rows(image.as_raw())?;
+        finished.push(file.finish()?);
+    }
+    persist_all(finished)
 }
 
 /// Writes one image atomically (see [`write_images`]).
@@ -96,32 +190,43 @@ pub fn write_image(path: &Path, image: &RgbImage) -> Result<(), ImageError> {
     write_images(&[(path.to_path_buf(), image.clone())])
 }
 
-fn encode_to_temp(path: &Path, image: &RgbImage) -> Result<tempfile::NamedTempFile, ImageError> {
-    let fail = |message: String| ImageError { path: path.to_path_buf(), message };
-    let format = ImageFormat::from_path(path)
-        .ok_or_else(|| fail("unsupported image format (use a .tga or .png file name)".into()))?;
-    let dir = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p,
-        _ => Path::new("."),
-    };
-    let temp = tempfile::Builder::new()
-        .prefix(".raycaster-")
-        .suffix(".tmp")
-        .tempfile_in(dir)
-        .map_err(|e| fail(format!("cannot create a file in {}: {e}", dir.display())))?;
-    let mut out = BufWriter::new(temp.as_file());
-    let (w, h) = image.dimensions();
-    let result = match format {
-        ImageFormat::Tga => {
-            TgaEncoder::new(&mut out).disable_rle().write_image(image.as_raw(), w, h, ExtendedColorType::Rgb8)
+/// TGA type 2 (uncompressed true colour), 24 bits, origin bottom-left as the course writes it.
+fn tga_start(file: std::fs::File, width: u32, height: u32) -> std::io::Result<BufWriter<std::fs::File>> {
+    let too_big = |side: u32| u16::try_from(side).map_err(|_| std::io::Error::other("TGA sides are at most 65535"));
+    let (w, h) = (too_big(width)?, too_big(height)?);
+    let mut header = [0u8; TGA_HEADER as usize];
+    header[2] = 2;
+    header[12..14].copy_from_slice(&w.to_le_bytes());
+    header[14..16].copy_from_slice(&h.to_le_bytes());
+    header[16] = 24;
+    let mut out = BufWriter::new(file);
+    out.write_all(&header)?;
+    Ok(out)
+}
+
+/// Rows arrive top first but TGA stores the bottom row first: the block lands at file row
+/// `bottom_row` (counted from the bottom), its rows reversed, pixels as BGR.
+fn tga_rows(out: &mut BufWriter<std::fs::File>, rgb: &[u8], row_bytes: usize, bottom_row: u32) -> std::io::Result<()> {
+    use std::io::{Seek, SeekFrom};
+    out.seek(SeekFrom::Start(TGA_HEADER + bottom_row as u64 * row_bytes as u64))?;
+    let mut bgr = vec![0u8; rgb.len()];
+    for (to, from) in bgr.chunks_exact_mut(row_bytes).zip(rgb.chunks_exact(row_bytes).rev()) {
+        for (t, f) in to.chunks_exact_mut(3).zip(from.chunks_exact(3)) {
+            t.copy_from_slice(&[f[2], f[1], f[0]]);
         }
-        ImageFormat::Png => PngEncoder::new(&mut out).write_image(image.as_raw(), w, h, ExtendedColorType::Rgb8),
-    };
-    result.map_err(|e| fail(e.to_string()))?;
-    out.flush().map_err(|e| fail(e.to_string()))?;
-    drop(out);
-    make_readable(&temp).map_err(|e| fail(e.to_string()))?;
-    Ok(temp)
+    }
+    out.write_all(&bgr)
+}
+
+fn png_start(
+    file: std::fs::File,
+    width: u32,
+    height: u32,
+) -> Result<png::StreamWriter<'static, BufWriter<std::fs::File>>, png::EncodingError> {
+    let mut encoder = png::Encoder::new(BufWriter::new(file), width, height);
+    encoder.set_color(png::ColorType::Rgb);
+    encoder.set_depth(png::BitDepth::Eight);
+    encoder.write_header()?.into_stream_writer()
 }
 
 /// Temporary files are private (0600); an image is an ordinary file (0644).

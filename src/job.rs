@@ -3,7 +3,7 @@
 use crate::backend::Backend;
 use crate::cli::RenderArgs;
 use crate::gpu::GpuError;
-use crate::image_io::{self, ImageError};
+use crate::image_io::{self, ImageError, ImageFile};
 use crate::render::RenderOptions;
 use crate::scene::{self, Scene, SceneError};
 
@@ -40,21 +40,41 @@ pub fn run(args: &RenderArgs, backend: &Backend) -> Result<Vec<String>, Error> {
     Ok(scene.warnings)
 }
 
-/// Renders an already-loaded scene as `args` asks and writes the images.
+/// Renders an already-loaded scene as `args` asks and writes the images, tile by tile, so
+/// memory stays bounded by the tile whatever the image size.
 pub fn render_scene(scene: &Scene, args: &RenderArgs, backend: &Backend) -> Result<(), Error> {
-    let frame = backend.render(scene, &options_for(args))?;
-    let mut images = Vec::new();
+    let options = options_for(args);
+    let mut outputs = Vec::new();
     if let Some(path) = &args.output {
-        images.push((path.clone(), image_io::color_image(&frame)));
+        outputs.push((ImageFile::create(path, args.width, args.height)?, Kind::Color));
     }
     if let Some(path) = &args.normals {
-        images.push((path.clone(), image_io::normals_image(&frame)));
+        outputs.push((ImageFile::create(path, args.width, args.height)?, Kind::Normals));
     }
     if let Some(depth) = &args.depth {
-        images.push((depth.path.clone(), image_io::depth_image(&frame, depth.min, depth.max)));
+        outputs.push((ImageFile::create(&depth.path, args.width, args.height)?, Kind::Depth(depth.min, depth.max)));
     }
-    image_io::write_images(&images)?;
+    backend.render_tiles(scene, &options, |_first_row, tile| {
+        for (file, kind) in &mut outputs {
+            let rows = match *kind {
+                Kind::Color => image_io::color_image(&tile),
+                Kind::Normals => image_io::normals_image(&tile),
+                Kind::Depth(min, max) => image_io::depth_image(&tile, min, max),
+            };
+            file.write_rows(rows.as_raw())?;
+        }
+        Ok::<(), Error>(())
+    })?;
+    let finished = outputs.into_iter().map(|(file, _)| file.finish()).collect::<Result<Vec<_>, _>>()?;
+    image_io::persist_all(finished)?;
     Ok(())
+}
+
+/// Which image an output file receives.
+enum Kind {
+    Color,
+    Normals,
+    Depth(f32, f32),
 }
 
 /// What `raycaster compare` found: the GPU against the reference, per output.

@@ -120,3 +120,22 @@ impl Frame {
         }
     }
 }
+
+impl Frame {
+    /// Copies `tile` (full-width rows) into this frame starting at image row `first_row`.
+    pub fn paste(&mut self, first_row: u32, tile: &Frame) {
+        assert_eq!(tile.width, self.width, "tiles are full rows");
+        let start = first_row as usize * self.width as usize;
+        let end = start + tile.hit.len();
+        self.hit[start..end].copy_from_slice(&tile.hit);
+        if !self.color.is_empty() {
+            self.color[start..end].copy_from_slice(&tile.color);
+        }
+        if !self.normal.is_empty() {
+            self.normal[start..end].copy_from_slice(&tile.normal);
+        }
+        if !self.depth.is_empty() {
+            self.depth[start..end].copy_from_slice(&tile.depth);
+        }
+    }
+}

@@ -18,12 +18,18 @@ use std::collections::HashMap;
 /// Renders `scene` with the f64 reference. Panics only if the camera is degenerate, which
 /// the parser rejects.
 pub fn render(scene: &Scene, options: &RenderOptions) -> Frame {
+    render_rows(scene, options, 0, options.height)
+}
+
+/// Renders image rows `first_row .. first_row + rows` (counted from the top) as a frame of
+/// that many full-width rows.
+pub fn render_rows(scene: &Scene, options: &RenderOptions, first_row: u32, rows: u32) -> Frame {
     let rays = PrimaryRays::new(&scene.camera, options.width, options.height)
         .expect("the parser rejects cameras whose up is parallel to their direction");
     let tracer = Tracer::new(scene);
     let width = options.width as usize;
-    let mut frame = Frame::new(options);
-    let rows: Vec<Vec<PixelResult>> = (0..options.height)
+    let mut frame = Frame::new(&RenderOptions { height: rows, ..*options });
+    let pixels: Vec<Vec<PixelResult>> = (first_row..first_row + rows)
         .into_par_iter()
         .map(|row| {
             // Image rows run from the top; the camera's j runs from the bottom.
@@ -31,7 +37,7 @@ pub fn render(scene: &Scene, options: &RenderOptions) -> Frame {
             (0..options.width).map(|i| tracer.pixel(&rays.ray(i, j), rays.t_min(), options)).collect()
         })
         .collect();
-    for (row, pixels) in rows.into_iter().enumerate() {
+    for (row, pixels) in pixels.into_iter().enumerate() {
         for (i, p) in pixels.into_iter().enumerate() {
             let k = row * width + i;
             frame.hit[k] = p.hit.is_some();

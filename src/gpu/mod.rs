@@ -94,6 +94,7 @@ pub struct GpuRenderer {
     pipeline_layout: wgpu::PipelineLayout,
     module: wgpu::ShaderModule,
     pipelines: Mutex<HashMap<KernelConfig, wgpu::ComputePipeline>>,
+    max_tile_bytes: u64,
 }
 
 impl GpuRenderer {
@@ -148,7 +149,14 @@ impl GpuRenderer {
             pipeline_layout,
             module,
             pipelines: Mutex::new(HashMap::new()),
+            max_tile_bytes: MAX_TILE_BYTES,
         })
+    }
+
+    /// Caps the output buffer of one dispatch (default 64 MiB, or less if the adapter's
+    /// limits are lower); images taller than that render in several tiles.
+    pub fn set_max_tile_bytes(&mut self, bytes: u64) {
+        self.max_tile_bytes = bytes;
     }
 
     /// Which adapter this renderer runs on (name, backend, device type).
@@ -158,21 +166,36 @@ impl GpuRenderer {
 
     /// Renders `scene` into float buffers; see [`crate::image_io`] for images.
     pub fn render(&self, scene: &Scene, options: &RenderOptions) -> Result<Frame, GpuError> {
+        let mut frame = Frame::new(options);
+        self.render_tiles(scene, options, |first_row, tile| {
+            frame.paste(first_row, &tile);
+            Ok::<(), GpuError>(())
+        })?;
+        Ok(frame)
+    }
+
+    /// Renders `scene` in tiles of full rows, top first, handing each to `on_tile` with its
+    /// first image row as soon as it is read back: memory is bounded by the tile.
+    pub fn render_tiles<E: From<GpuError>>(
+        &self,
+        scene: &Scene,
+        options: &RenderOptions,
+        mut on_tile: impl FnMut(u32, Frame) -> Result<(), E>,
+    ) -> Result<(), E> {
         let rays = PrimaryRays::new(&scene.camera, options.width, options.height)
             .expect("the parser rejects cameras whose up is parallel to their direction");
         let buffers = SceneBuffers::new(scene, &rays);
         let pipeline = self.pipeline(KernelConfig::new(&buffers, options));
         let inputs = self.upload(&buffers)?;
-        let mut frame = Frame::new(options);
         let tile_rows = self.tile_rows(options.width)?;
         let mut first_row = 0;
         while first_row < options.height {
             let rows = tile_rows.min(options.height - first_row);
             let pixels = self.render_tile(&pipeline, &inputs, buffers.params, first_row, rows)?;
-            store_tile(&mut frame, &pixels, first_row);
+            on_tile(first_row, tile_frame(options, rows, &pixels))?;
             first_row += rows;
         }
-        Ok(frame)
+        Ok(())
     }
 
     fn pipeline(&self, config: KernelConfig) -> wgpu::ComputePipeline {
@@ -199,8 +222,10 @@ impl GpuRenderer {
     /// binding limit and our own cap, and the dispatch size limit.
     fn tile_rows(&self, width: u32) -> Result<u32, GpuError> {
         let row_bytes = width as u64 * std::mem::size_of::<PixelOut>() as u64;
-        let budget =
-            MAX_TILE_BYTES.min(self.limits.max_storage_buffer_binding_size as u64).min(self.limits.max_buffer_size);
+        let budget = self
+            .max_tile_bytes
+            .min(self.limits.max_storage_buffer_binding_size as u64)
+            .min(self.limits.max_buffer_size);
         let rows = budget / row_bytes;
         let max_groups = self.limits.max_compute_workgroups_per_dimension as u64;
         if rows == 0 || (width as u64).div_ceil(WORKGROUP as u64) > max_groups {
@@ -348,19 +373,18 @@ fn read_back(device: &wgpu::Device, buffer: &wgpu::Buffer) -> Result<Vec<PixelOu
     Ok(pixels)
 }
 
-fn store_tile(frame: &mut Frame, pixels: &[PixelOut], first_row: u32) {
-    let start = first_row as usize * frame.width as usize;
-    for (k, p) in pixels.iter().enumerate() {
-        let index = start + k;
-        frame.hit[index] = p.hit != 0;
-        if !frame.color.is_empty() {
-            frame.color[index] = p.color;
-        }
-        if !frame.normal.is_empty() {
-            frame.normal[index] = p.normal;
-        }
-        if !frame.depth.is_empty() {
-            frame.depth[index] = p.t;
-        }
+/// The read-back pixels of one tile as a frame of `rows` full rows.
+fn tile_frame(options: &RenderOptions, rows: u32, pixels: &[PixelOut]) -> Frame {
+    let mut frame = Frame::new(&RenderOptions { height: rows, ..*options });
+    frame.hit = pixels.iter().map(|p| p.hit != 0).collect();
+    if options.color {
+        frame.color = pixels.iter().map(|p| p.color).collect();
     }
+    if options.normals {
+        frame.normal = pixels.iter().map(|p| p.normal).collect();
+    }
+    if options.depth {
+        frame.depth = pixels.iter().map(|p| p.t).collect();
+    }
+    frame
 }

@@ -1,0 +1,75 @@
+//! Tiled rendering and streamed image files give exactly what one whole-frame pass gives.
+
+mod common;
+
+use raycaster::gpu::GpuRenderer;
+use raycaster::image_io::{color_image, read_image, ImageFile};
+use raycaster::render::RenderOptions;
+use raycaster::scene::load_scene;
+
+fn scene() -> raycaster::scene::Scene {
+    load_scene(&common::scenes_dir().join("ellipsoids.txt")).unwrap()
+}
+
+/// Tiles of 3 rows (the last one shorter) against one tile: identical float buffers.
+#[test]
+fn gpu_tiles_equal_one_pass() {
+    if common::gpu().is_none() {
+        return;
+    }
+    let options = RenderOptions::all(37, 23);
+    let whole = common::gpu().unwrap().render(&scene(), &options).unwrap();
+    let mut small = GpuRenderer::new().unwrap();
+    small.set_max_tile_bytes(37 * 3 * 32);
+    let mut tiles = 0;
+    let mut rows_seen = Vec::new();
+    small
+        .render_tiles(&scene(), &options, |first_row, tile| {
+            tiles += 1;
+            rows_seen.push((first_row, tile.height));
+            Ok::<(), raycaster::gpu::GpuError>(())
+        })
+        .unwrap();
+    assert_eq!(tiles, 8, "{rows_seen:?}");
+    assert_eq!(rows_seen.last(), Some(&(21, 2)));
+    assert_eq!(small.render(&scene(), &options).unwrap(), whole);
+}
+
+/// The CPU reference by row ranges equals the whole frame.
+#[test]
+fn cpu_rows_equal_one_pass() {
+    let options = RenderOptions::all(20, 11);
+    let whole = raycaster::cpu::render(&scene(), &options);
+    let mut pasted = raycaster::render::Frame::new(&options);
+    for (first, rows) in [(0, 4), (4, 4), (8, 3)] {
+        pasted.paste(first, &raycaster::cpu::render_rows(&scene(), &options, first, rows));
+    }
+    assert_eq!(pasted, whole);
+}
+
+/// An image streamed in uneven chunks of rows reads back identical, in both formats.
+#[test]
+fn streamed_files_read_back_identical() {
+    let image = color_image(&raycaster::cpu::render(&scene(), &RenderOptions::all(31, 17)));
+    let dir = tempfile::tempdir().unwrap();
+    for name in ["s.tga", "s.png"] {
+        let path = dir.path().join(name);
+        let mut file = ImageFile::create(&path, 31, 17).unwrap();
+        let row = 31 * 3;
+        for (start, end) in [(0, 5), (5, 6), (6, 17)] {
+            file.write_rows(&image.as_raw()[start * row..end * row]).unwrap();
+        }
+        raycaster::image_io::persist_all(vec![file.finish().unwrap()]).unwrap();
+        assert_eq!(read_image(&path).unwrap(), image, "{name}");
+    }
+}
+
+/// A file that did not receive all its rows is refused, and nothing is left behind.
+#[test]
+fn incomplete_file_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut file = ImageFile::create(&dir.path().join("x.tga"), 4, 4).unwrap();
+    file.write_rows(&[0; 4 * 3 * 2]).unwrap();
+    assert!(file.finish().is_err());
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+}
