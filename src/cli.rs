@@ -32,6 +32,13 @@ Usage: raycaster [compare] -input SCENE -size W H [-output FILE] [-normals FILE]
   --sphere-test S        the GPU's ray/sphere test (default robust)
   -h, --help             this text
 
+raycaster batch FILE [--backend B]
+  Runs every line of FILE as a render command line (the course's commands.txt works as it
+  is: arguments without the program name, paths relative to the working directory, split at
+  spaces), in one process with one GPU device. Blank lines and lines starting with # are
+  skipped. A failing line is reported with its number and the rest still run; the exit
+  status is then 1.
+
 raycaster compare ... [--max-diff-pixels N]
   Renders the outputs named with the GPU and with the f64 reference, writes no file, and
   prints their differences per output: pixels more than 1 level apart, hit/miss
@@ -80,6 +87,11 @@ pub enum Command {
         args: RenderArgs,
         max_diff_pixels: Option<u64>,
     },
+    /// `raycaster batch FILE`: one render command line per line of FILE, in one process.
+    Batch {
+        file: PathBuf,
+        backend: BackendChoice,
+    },
     Help,
 }
 
@@ -102,6 +114,9 @@ where
     S: Into<OsString>,
 {
     let args: Vec<OsString> = args.into_iter().map(Into::into).collect();
+    if args.first().is_some_and(|a| a == "batch") {
+        return parse_batch(&args[1..]);
+    }
     let compare = args.first().is_some_and(|a| a == "compare");
     let mut values = Values { args: &args, next: usize::from(compare) };
     let mut max_diff_pixels = None;
@@ -167,6 +182,24 @@ where
         return Ok(Command::Compare { args, max_diff_pixels });
     }
     Ok(Command::Render(args))
+}
+
+/// `batch FILE [--backend B]`.
+fn parse_batch(args: &[OsString]) -> Result<Command, UsageError> {
+    let mut values = Values { args, next: 0 };
+    let (mut file, mut backend) = (None, BackendChoice::Auto);
+    while let Some(raw) = values.next_raw() {
+        let text = raw.to_string_lossy().into_owned();
+        match flag_name(&text).as_deref() {
+            Some("backend") => backend = values.backend(&text)?,
+            Some("h" | "help") => return Ok(Command::Help),
+            Some(_) => return Err(UsageError(format!("batch: unknown flag '{text}'"))),
+            None if file.is_none() => file = Some(PathBuf::from(raw)),
+            None => return Err(UsageError(format!("batch: unexpected argument '{text}'"))),
+        }
+    }
+    let file = file.ok_or_else(|| UsageError("batch expects a file of command lines".into()))?;
+    Ok(Command::Batch { file, backend })
 }
 
 /// `-shade_back`, `--shade-back` → `shade_back`; `None` for something that is not a flag
@@ -329,6 +362,16 @@ mod tests {
             .unwrap_err()
             .0
             .contains("cramer, moller, watertight"));
+    }
+
+    #[test]
+    fn batch() {
+        assert_eq!(
+            parse("batch commands.txt --backend gpu"),
+            Ok(Command::Batch { file: "commands.txt".into(), backend: BackendChoice::Gpu })
+        );
+        assert!(parse("batch").unwrap_err().0.contains("expects a file"));
+        assert!(parse("batch a b").unwrap_err().0.contains("'b'"));
     }
 
     #[test]

@@ -106,3 +106,35 @@ pub fn compare(args: &RenderArgs, gpu: &crate::gpu::GpuRenderer) -> Result<Compa
     };
     Ok(Comparison { errors: crate::metrics::compare_frames(&ours, &reference, depth_range), warnings: scene.warnings })
 }
+
+/// One failed line of a batch.
+#[derive(Debug)]
+pub struct BatchFailure {
+    pub line: usize,
+    pub message: String,
+}
+
+/// Runs each render command line of `text` with `backend`.
+/// Returns the warnings printed along the way and the lines that failed; a failing line
+/// does not stop the others.
+pub fn run_batch(text: &str, backend: &Backend) -> (Vec<String>, Vec<BatchFailure>) {
+    let mut warnings = Vec::new();
+    let mut failures = Vec::new();
+    for (index, line) in text.lines().enumerate() {
+        let line_number = index + 1;
+        let words: Vec<&str> = line.split_whitespace().collect();
+        if words.is_empty() || words[0].starts_with('#') {
+            continue;
+        }
+        let fail = |message: String| BatchFailure { line: line_number, message };
+        match crate::cli::parse_args(&words) {
+            Ok(crate::cli::Command::Render(args)) => match run(&args, backend) {
+                Ok(w) => warnings.extend(w),
+                Err(e) => failures.push(fail(e.to_string())),
+            },
+            Ok(_) => failures.push(fail("only render command lines can be batched".into())),
+            Err(e) => failures.push(fail(e.0)),
+        }
+    }
+    (warnings, failures)
+}

@@ -13,6 +13,7 @@ fn main() -> ExitCode {
         }
         Ok(Command::Render(args)) => render(&args),
         Ok(Command::Compare { args, max_diff_pixels }) => compare(&args, max_diff_pixels),
+        Ok(Command::Batch { file, backend }) => batch(&file, backend),
         Err(e) => {
             eprintln!("raycaster: {e}");
             ExitCode::from(2)
@@ -57,6 +58,27 @@ fn compare(args: &RenderArgs, max_diff_pixels: Option<u64>) -> ExitCode {
             eprintln!("raycaster: {e}");
             ExitCode::FAILURE
         }
+    }
+}
+
+fn batch(file: &std::path::Path, choice: BackendChoice) -> ExitCode {
+    let text = match std::fs::read_to_string(file) {
+        Ok(text) => text,
+        Err(e) => {
+            eprintln!("raycaster: {}: {e}", file.display());
+            return ExitCode::FAILURE;
+        }
+    };
+    let Some(backend) = open_backend(choice) else { return ExitCode::FAILURE };
+    let (warnings, failures) = raycaster::job::run_batch(&text, &backend);
+    warn(&warnings);
+    for f in &failures {
+        eprintln!("raycaster: {}:{}: {}", file.display(), f.line, f.message);
+    }
+    if failures.is_empty() {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::FAILURE
     }
 }
 

@@ -218,3 +218,26 @@ fn gpu_and_cpu_binaries_agree() {
     let diff = common::pixel_diff(&images[0], &images[1]);
     assert!(diff.off_by_more_than_one <= 2, "{diff:?}");
 }
+
+/// `batch` runs every line in one process; a bad line is reported with its number and the
+/// others still run, and the exit status says something failed.
+#[test]
+fn batch_runs_every_line_and_reports_failures() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = std::fs::canonicalize("scenes/spheres_ortho.txt").unwrap();
+    let s = scene.to_str().unwrap();
+    let commands = format!(
+        "# a comment\n-input {s} -size 8 8 -output a.tga\n\n-input {s} -size 0 8 -output b.tga\n-input {s} -size 8 8 -normals c.png\n"
+    );
+    std::fs::write(dir.path().join("commands.txt"), commands).unwrap();
+    let result = Command::new(env!("CARGO_BIN_EXE_raycaster"))
+        .args(["batch", "commands.txt", "--backend", "cpu"])
+        .current_dir(dir.path())
+        .output()
+        .unwrap();
+    let message = stderr(&result);
+    assert_eq!(result.status.code(), Some(1), "{message}");
+    assert!(message.contains("commands.txt:4: -size"), "{message}");
+    assert!(dir.path().join("a.tga").exists() && dir.path().join("c.png").exists());
+    assert!(!dir.path().join("b.tga").exists());
+}
