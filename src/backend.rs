@@ -1,7 +1,7 @@
 //! Choosing and calling a renderer: the GPU kernel or the f64 CPU reference.
 
 use crate::cli::BackendChoice;
-use crate::gpu::{GpuError, GpuRenderer};
+use crate::gpu::{GpuError, GpuRenderer, RenderStats};
 use crate::render::{Frame, RenderOptions};
 use crate::scene::Scene;
 
@@ -43,18 +43,20 @@ impl Backend {
         scene: &Scene,
         options: &RenderOptions,
         mut on_tile: impl FnMut(u32, Frame) -> Result<(), E>,
-    ) -> Result<(), E> {
+    ) -> Result<RenderStats, E> {
         match self {
             Backend::Gpu(gpu) => gpu.render_tiles(scene, options, on_tile),
             Backend::Cpu => {
                 let rows_per_tile = (CPU_TILE_PIXELS / options.width).max(1);
+                let mut stats = RenderStats::default();
                 let mut first_row = 0;
                 while first_row < options.height {
                     let rows = rows_per_tile.min(options.height - first_row);
                     on_tile(first_row, crate::cpu::render_rows(scene, options, first_row, rows))?;
                     first_row += rows;
+                    stats.tiles += 1;
                 }
-                Ok(())
+                Ok(stats)
             }
         }
     }

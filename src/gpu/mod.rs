@@ -95,6 +95,17 @@ pub struct GpuRenderer {
     module: wgpu::ShaderModule,
     pipelines: Mutex<HashMap<KernelConfig, wgpu::ComputePipeline>>,
     max_tile_bytes: u64,
+    timestamps: bool,
+}
+
+/// What a render cost, as far as the GPU can tell.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct RenderStats {
+    /// Time spent in the kernel, summed over tiles, from GPU timestamp queries; `None`
+    /// where the adapter has none (then only wall time can be measured).
+    pub kernel_ns: Option<u64>,
+    /// Dispatches the image took.
+    pub tiles: u32,
 }
 
 impl GpuRenderer {
@@ -119,9 +130,12 @@ impl GpuRenderer {
             .map_err(|e| GpuError::NoAdapter(e.to_string()))?;
         // The defaults are below what lavapipe and real GPUs offer (MEASURED.md); ask for all.
         let limits = adapter.limits();
+        // Kernel time from the GPU's own clock where the adapter offers it (lavapipe does).
+        let features = adapter.features() & wgpu::Features::TIMESTAMP_QUERY;
         let (device, queue) = adapter
             .request_device(&wgpu::DeviceDescriptor {
                 label: Some("raycaster"),
+                required_features: features,
                 required_limits: limits.clone(),
                 ..Default::default()
             })
@@ -150,6 +164,7 @@ impl GpuRenderer {
             module,
             pipelines: Mutex::new(HashMap::new()),
             max_tile_bytes: MAX_TILE_BYTES,
+            timestamps: features.contains(wgpu::Features::TIMESTAMP_QUERY),
         })
     }
 
@@ -181,21 +196,24 @@ impl GpuRenderer {
         scene: &Scene,
         options: &RenderOptions,
         mut on_tile: impl FnMut(u32, Frame) -> Result<(), E>,
-    ) -> Result<(), E> {
+    ) -> Result<RenderStats, E> {
         let rays = PrimaryRays::new(&scene.camera, options.width, options.height)
             .expect("the parser rejects cameras whose up is parallel to their direction");
         let buffers = SceneBuffers::new(scene, &rays);
         let pipeline = self.pipeline(KernelConfig::new(&buffers, options));
         let inputs = self.upload(&buffers)?;
         let tile_rows = self.tile_rows(options.width)?;
+        let mut stats = RenderStats { kernel_ns: self.timestamps.then_some(0), tiles: 0 };
         let mut first_row = 0;
         while first_row < options.height {
             let rows = tile_rows.min(options.height - first_row);
-            let pixels = self.render_tile(&pipeline, &inputs, buffers.params, first_row, rows)?;
+            let (pixels, kernel_ns) = self.render_tile(&pipeline, &inputs, buffers.params, first_row, rows)?;
+            stats.kernel_ns = stats.kernel_ns.zip(kernel_ns).map(|(a, b)| a + b);
+            stats.tiles += 1;
             on_tile(first_row, tile_frame(options, rows, &pixels))?;
             first_row += rows;
         }
-        Ok(())
+        Ok(stats)
     }
 
     fn pipeline(&self, config: KernelConfig) -> wgpu::ComputePipeline {
@@ -266,7 +284,7 @@ impl GpuRenderer {
         mut params: buffers::Params,
         first_row: u32,
         rows: u32,
-    ) -> Result<Vec<PixelOut>, GpuError> {
+    ) -> Result<(Vec<PixelOut>, Option<u64>), GpuError> {
         params.first_row = first_row;
         params.tile_rows = rows;
         let params_buffer = self.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -309,16 +327,31 @@ impl GpuRenderer {
         });
         let mut encoder =
             self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("raycast") });
+        // Per render, not per renderer: renders from several threads must not share them.
+        let timer = self.timestamps.then(|| Timer::new(&self.device));
         {
-            let mut pass = encoder
-                .begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("raycast"), timestamp_writes: None });
+            let timestamp_writes = timer.as_ref().map(|t| wgpu::ComputePassTimestampWrites {
+                query_set: &t.queries,
+                beginning_of_pass_write_index: Some(0),
+                end_of_pass_write_index: Some(1),
+            });
+            let mut pass =
+                encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("raycast"), timestamp_writes });
             pass.set_pipeline(pipeline);
             pass.set_bind_group(0, &bind_group, &[]);
             pass.dispatch_workgroups(params.width.div_ceil(WORKGROUP), rows.div_ceil(WORKGROUP), 1);
         }
         encoder.copy_buffer_to_buffer(&output, 0, &readback, 0, size);
+        if let Some(timer) = &timer {
+            timer.resolve(&mut encoder);
+        }
         self.queue.submit([encoder.finish()]);
-        read_back(&self.device, &readback)
+        let pixels: Vec<PixelOut> = bytemuck::pod_collect_to_vec(&read_back(&self.device, &readback)?);
+        let kernel_ns = match &timer {
+            Some(timer) => Some(timer.elapsed_ns(&self.device, self.queue.get_timestamp_period())?),
+            None => None,
+        };
+        Ok((pixels, kernel_ns))
     }
 }
 
@@ -357,7 +390,47 @@ fn non_empty<T: bytemuck::Pod>(items: &[T]) -> &[u8] {
     }
 }
 
-fn read_back(device: &wgpu::Device, buffer: &wgpu::Buffer) -> Result<Vec<PixelOut>, GpuError> {
+/// Two timestamps around the compute pass, resolved into a buffer we can map.
+struct Timer {
+    queries: wgpu::QuerySet,
+    resolved: wgpu::Buffer,
+    readback: wgpu::Buffer,
+}
+
+impl Timer {
+    fn new(device: &wgpu::Device) -> Timer {
+        let buffer = |label, usage| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: 16,
+                usage,
+                mapped_at_creation: false,
+            })
+        };
+        Timer {
+            queries: device.create_query_set(&wgpu::QuerySetDescriptor {
+                label: Some("kernel time"),
+                ty: wgpu::QueryType::Timestamp,
+                count: 2,
+            }),
+            resolved: buffer("timestamps", wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC),
+            readback: buffer("timestamps readback", wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST),
+        }
+    }
+
+    fn resolve(&self, encoder: &mut wgpu::CommandEncoder) {
+        encoder.resolve_query_set(&self.queries, 0..2, &self.resolved, 0);
+        encoder.copy_buffer_to_buffer(&self.resolved, 0, &self.readback, 0, 16);
+    }
+
+    fn elapsed_ns(&self, device: &wgpu::Device, period_ns: f32) -> Result<u64, GpuError> {
+        let bytes = read_back(device, &self.readback)?;
+        let ticks: Vec<u64> = bytemuck::pod_collect_to_vec(&bytes);
+        Ok((ticks[1].saturating_sub(ticks[0]) as f64 * period_ns as f64) as u64)
+    }
+}
+
+fn read_back(device: &wgpu::Device, buffer: &wgpu::Buffer) -> Result<Vec<u8>, GpuError> {
     let slice = buffer.slice(..);
     let (sender, receiver) = std::sync::mpsc::channel();
     slice.map_async(wgpu::MapMode::Read, move |result| {
@@ -365,12 +438,9 @@ fn read_back(device: &wgpu::Device, buffer: &wgpu::Buffer) -> Result<Vec<PixelOu
     });
     device.poll(wgpu::PollType::wait_indefinitely()).map_err(|e| GpuError::Readback(e.to_string()))?;
     receiver.recv().map_err(|e| GpuError::Readback(e.to_string()))?.map_err(|e| GpuError::Readback(e.to_string()))?;
-    let pixels = {
-        let view = slice.get_mapped_range().map_err(|e| GpuError::Readback(e.to_string()))?;
-        bytemuck::cast_slice::<u8, PixelOut>(&view).to_vec()
-    };
+    let bytes = slice.get_mapped_range().map_err(|e| GpuError::Readback(e.to_string()))?.to_vec();
     buffer.unmap();
-    Ok(pixels)
+    Ok(bytes)
 }
 
 /// The read-back pixels of one tile as a frame of `rows` full rows.
