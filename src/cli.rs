@@ -39,6 +39,12 @@ raycaster batch FILE [--backend B]
   skipped. A failing line is reported with its number and the rest still run; the exit
   status is then 1.
 
+raycaster bench [--quick] [--runs N] [--out DIR] [--corpus DIR]
+  Times the GPU kernel on the course scenes, larger meshes and image sizes, with the error
+  against the f64 reference for each row; prints a Markdown table and writes DIR/bench.csv
+  and DIR/bench.png (default DIR target/bench, corpus ../shared/mit6837, 5 runs).
+  --quick: a few small cases, seconds in all.
+
 raycaster compare ... [--max-diff-pixels N]
   Renders the outputs named with the GPU and with the f64 reference, writes no file, and
   prints their differences per output: pixels more than 1 level apart, hit/miss
@@ -92,7 +98,21 @@ pub enum Command {
         file: PathBuf,
         backend: BackendChoice,
     },
+    /// `raycaster bench`: speed and error per scene and size.
+    Bench(BenchArgs),
     Help,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct BenchArgs {
+    /// A few small cases that take seconds (what CI runs).
+    pub quick: bool,
+    /// Renders per case (medians are reported).
+    pub runs: usize,
+    /// Where the CSV and the plot go.
+    pub out: PathBuf,
+    /// The course corpus (`a2/`, `meshes/`).
+    pub corpus: PathBuf,
 }
 
 /// A bad command line, as one line of text.
@@ -116,6 +136,9 @@ where
     let args: Vec<OsString> = args.into_iter().map(Into::into).collect();
     if args.first().is_some_and(|a| a == "batch") {
         return parse_batch(&args[1..]);
+    }
+    if args.first().is_some_and(|a| a == "bench") {
+        return parse_bench(&args[1..]);
     }
     let compare = args.first().is_some_and(|a| a == "compare");
     let mut values = Values { args: &args, next: usize::from(compare) };
@@ -200,6 +223,36 @@ fn parse_batch(args: &[OsString]) -> Result<Command, UsageError> {
     }
     let file = file.ok_or_else(|| UsageError("batch expects a file of command lines".into()))?;
     Ok(Command::Batch { file, backend })
+}
+
+/// `bench [--quick] [--runs N] [--out DIR] [--corpus DIR]`.
+fn parse_bench(args: &[OsString]) -> Result<Command, UsageError> {
+    let mut values = Values { args, next: 0 };
+    let mut bench = BenchArgs {
+        quick: false,
+        runs: 5,
+        out: PathBuf::from("target/bench"),
+        corpus: PathBuf::from("../shared/mit6837"),
+    };
+    while let Some(raw) = values.next_raw() {
+        let text = raw.to_string_lossy().into_owned();
+        match flag_name(&text).as_deref() {
+            Some("quick") => bench.quick = true,
+            Some("out") => bench.out = values.path(&text)?,
+            Some("corpus") => bench.corpus = values.path(&text)?,
+            Some("runs") => {
+                let value = values.take(&text, "a number of runs")?;
+                let text_value = value.to_string_lossy();
+                bench.runs = match text_value.parse::<usize>() {
+                    Ok(n) if n >= 1 => n,
+                    _ => return Err(UsageError(format!("{text}: '{text_value}' is not a whole number ≥ 1"))),
+                };
+            }
+            Some("h" | "help") => return Ok(Command::Help),
+            _ => return Err(UsageError(format!("bench: unknown argument '{text}'"))),
+        }
+    }
+    Ok(Command::Bench(bench))
 }
 
 /// `-shade_back`, `--shade-back` → `shade_back`; `None` for something that is not a flag

@@ -7,6 +7,7 @@
 //! [`cli`] and [`job`] are the command line's layer over that.
 
 pub mod backend;
+pub mod bench;
 pub mod camera;
 pub mod cli;
 pub mod cpu;

@@ -14,6 +14,7 @@ fn main() -> ExitCode {
         Ok(Command::Render(args)) => render(&args),
         Ok(Command::Compare { args, max_diff_pixels }) => compare(&args, max_diff_pixels),
         Ok(Command::Batch { file, backend }) => batch(&file, backend),
+        Ok(Command::Bench(bench_args)) => bench(&bench_args),
         Err(e) => {
             eprintln!("raycaster: {e}");
             ExitCode::from(2)
@@ -79,6 +80,44 @@ fn batch(file: &std::path::Path, choice: BackendChoice) -> ExitCode {
         ExitCode::SUCCESS
     } else {
         ExitCode::FAILURE
+    }
+}
+
+fn bench(args: &cli::BenchArgs) -> ExitCode {
+    use raycaster::bench;
+    let Some(Backend::Gpu(gpu)) = open_backend(BackendChoice::Gpu) else { return ExitCode::FAILURE };
+    let cases = match bench::standard_cases(&args.corpus, args.quick) {
+        Ok(cases) => cases,
+        Err(e) => {
+            eprintln!("raycaster: bench: {e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    let mut rows = Vec::new();
+    for case in &cases {
+        eprintln!("bench: {} {}×{} ({})", case.name, case.width, case.height, case.triangle_test.name());
+        match bench::run_case(&gpu, case, args.runs) {
+            Ok(row) => rows.push(row),
+            Err(e) => {
+                eprintln!("raycaster: bench: {}: {e}", case.name);
+                return ExitCode::FAILURE;
+            }
+        }
+    }
+    print!("{}", bench::markdown(&rows, &gpu.adapter_info().name));
+    let written = std::fs::create_dir_all(&args.out)
+        .map_err(|e| format!("{}: {e}", args.out.display()))
+        .and_then(|()| std::fs::write(args.out.join("bench.csv"), bench::csv(&rows)).map_err(|e| e.to_string()))
+        .and_then(|()| bench::plot(&rows, &args.out.join("bench.png")).map_err(|e| e.to_string()));
+    match written {
+        Ok(()) => {
+            eprintln!("bench: wrote {0}/bench.csv and {0}/bench.png", args.out.display());
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("raycaster: bench: {e}");
+            ExitCode::FAILURE
+        }
     }
 }
 

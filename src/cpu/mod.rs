@@ -24,37 +24,57 @@ pub fn render(scene: &Scene, options: &RenderOptions) -> Frame {
 /// Renders image rows `first_row .. first_row + rows` (counted from the top) as a frame of
 /// that many full-width rows.
 pub fn render_rows(scene: &Scene, options: &RenderOptions, first_row: u32, rows: u32) -> Frame {
-    let rays = PrimaryRays::new(&scene.camera, options.width, options.height)
-        .expect("the parser rejects cameras whose up is parallel to their direction");
-    let tracer = Tracer::new(scene);
-    let width = options.width as usize;
-    let mut frame = Frame::new(&RenderOptions { height: rows, ..*options });
-    let pixels: Vec<Vec<PixelResult>> = (first_row..first_row + rows)
-        .into_par_iter()
-        .map(|row| {
-            // Image rows run from the top; the camera's j runs from the bottom.
-            let j = options.height - 1 - row;
-            (0..options.width).map(|i| tracer.pixel(&rays.ray(i, j), rays.t_min(), options)).collect()
-        })
-        .collect();
-    for (row, pixels) in pixels.into_iter().enumerate() {
-        for (i, p) in pixels.into_iter().enumerate() {
-            let k = row * width + i;
+    let pixels: Vec<(u32, u32)> =
+        (first_row..first_row + rows).flat_map(|row| (0..options.width).map(move |i| (i, row))).collect();
+    let mut frame = Reference::new(scene, options).pixels(&pixels);
+    frame.width = options.width;
+    frame.height = rows;
+    frame
+}
+
+/// The reference prepared for one scene and image size, able to render any set of pixels
+/// on their own (the benchmark measures error on a subsample this way).
+pub struct Reference<'a> {
+    tracer: Tracer<'a>,
+    rays: PrimaryRays,
+    options: RenderOptions,
+}
+
+impl<'a> Reference<'a> {
+    pub fn new(scene: &'a Scene, options: &RenderOptions) -> Reference<'a> {
+        let rays = PrimaryRays::new(&scene.camera, options.width, options.height)
+            .expect("the parser rejects cameras whose up is parallel to their direction");
+        Reference { tracer: Tracer::new(scene), rays, options: *options }
+    }
+
+    /// The listed pixels (column from the left, row from the top) as a one-row frame, in
+    /// that order, rendered in parallel.
+    pub fn pixels(&self, pixels: &[(u32, u32)]) -> Frame {
+        let results: Vec<PixelResult> = pixels
+            .par_iter()
+            .map(|&(i, row)| {
+                // Image rows run from the top; the camera's j runs from the bottom.
+                let j = self.options.height - 1 - row;
+                self.tracer.pixel(&self.rays.ray(i, j), self.rays.t_min(), &self.options)
+            })
+            .collect();
+        let mut frame = Frame::new(&RenderOptions { width: pixels.len() as u32, height: 1, ..self.options });
+        for (k, p) in results.into_iter().enumerate() {
             frame.hit[k] = p.hit.is_some();
-            if options.color {
+            if self.options.color {
                 frame.color[k] = p.color.as_vec3().to_array();
             }
             if let Some(hit) = p.hit {
-                if options.normals {
+                if self.options.normals {
                     frame.normal[k] = hit.normal.as_vec3().to_array();
                 }
-                if options.depth {
+                if self.options.depth {
                     frame.depth[k] = hit.t as f32;
                 }
             }
         }
+        frame
     }
-    frame
 }
 
 /// The closest hit of one world-space ray with the whole scene, `t > t_min`.

@@ -5,6 +5,7 @@
 //! the file, line and column; no input makes them panic.
 
 mod error;
+pub mod generate;
 mod lexer;
 pub mod model;
 mod obj;

@@ -150,3 +150,35 @@ impl Mesh {
         [self.positions[a as usize], self.positions[b as usize], self.positions[c as usize]]
     }
 }
+
+/// How many primitives of each kind a scene holds (mesh triangles counted one by one).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct PrimitiveCounts {
+    pub spheres: usize,
+    pub planes: usize,
+    pub triangles: usize,
+}
+
+impl PrimitiveCounts {
+    pub fn total(&self) -> usize {
+        self.spheres + self.planes + self.triangles
+    }
+}
+
+impl Scene {
+    pub fn primitive_counts(&self) -> PrimitiveCounts {
+        let mut counts = PrimitiveCounts::default();
+        let mut pending: Vec<&Object> = self.root.iter().collect();
+        while let Some(object) = pending.pop() {
+            match &object.shape {
+                Shape::Group(children) => pending.extend(children),
+                Shape::Transform { child, .. } => pending.push(child),
+                Shape::Sphere { .. } => counts.spheres += 1,
+                Shape::Plane { .. } => counts.planes += 1,
+                Shape::Triangle { .. } => counts.triangles += 1,
+                Shape::Mesh { mesh, .. } => counts.triangles += mesh.triangles.len(),
+            }
+        }
+        counts
+    }
+}

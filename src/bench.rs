@@ -1,0 +1,407 @@
+//! `raycaster bench`: speed and error side by side, per scene and size.
+//!
+//! Each row renders one scene at one size on the GPU several times and reports the medians
+//! of the kernel time (GPU timestamps where the adapter has them, else wall time) and of the
+//! whole render's wall time, the rays per second, the peak memory, and the error against the
+//! f64 reference, measured on a regular subsample of pixels where the full reference would be
+//! too slow. The result is printed as Markdown, saved as CSV and drawn as a speed-against-error
+//! plot.
+
+use crate::cpu::Reference;
+use crate::gpu::{GpuError, GpuRenderer};
+use crate::metrics::{compare_frames, depth_range_of, Output, OutputErrors};
+use crate::render::{Frame, RenderOptions, TriangleTest};
+use crate::scene::{self, Background, Camera, DirectionalLight, Material, Mesh, Object, Projection, Scene, Shape};
+use glam::DVec3;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::Instant;
+
+/// One scene at one size, to be measured.
+pub struct Case {
+    pub name: String,
+    pub scene: Scene,
+    pub width: u32,
+    pub height: u32,
+    pub triangle_test: TriangleTest,
+}
+
+/// What one case measured.
+#[derive(Clone, Debug)]
+pub struct Row {
+    pub name: String,
+    pub triangle_test: TriangleTest,
+    pub primitives: usize,
+    pub triangles: usize,
+    pub width: u32,
+    pub height: u32,
+    /// Median kernel time; from GPU timestamps when `timestamps`, else the render's wall time.
+    pub kernel_ms: f64,
+    pub timestamps: bool,
+    /// Median wall time of the whole render (flatten, upload, kernel, read-back).
+    pub wall_ms: f64,
+    pub runs: usize,
+    /// Peak resident memory of the process during the case (Linux; 0 elsewhere).
+    pub peak_mib: f64,
+    /// Pixels the error was measured on.
+    pub samples: usize,
+    pub errors: Vec<OutputErrors>,
+}
+
+impl Row {
+    pub fn pixels(&self) -> u64 {
+        self.width as u64 * self.height as u64
+    }
+
+    pub fn mrays_per_s(&self) -> f64 {
+        self.pixels() as f64 / (self.kernel_ms * 1e3)
+    }
+
+    fn output(&self, output: Output) -> Option<&OutputErrors> {
+        self.errors.iter().find(|e| e.output == output)
+    }
+
+    /// The share of sampled pixels more than 1 level off, worst over the outputs.
+    pub fn off_fraction(&self) -> f64 {
+        let worst = self.errors.iter().map(|e| e.image.off_by_more_than_one).max().unwrap_or(0);
+        worst as f64 / self.samples.max(1) as f64
+    }
+}
+
+/// Measures `case` with `runs` renders (at least 1).
+pub fn run_case(gpu: &GpuRenderer, case: &Case, runs: usize) -> Result<Row, GpuError> {
+    let options = RenderOptions { triangle_test: case.triangle_test, ..RenderOptions::all(case.width, case.height) };
+    let counts = case.scene.primitive_counts();
+    let sampler = Sampler::new(options.width, options.height, sample_budget(counts.triangles));
+    reset_peak_memory();
+    let mut kernel = Vec::new();
+    let mut wall = Vec::new();
+    let mut timestamps = false;
+    let mut gpu_samples = Vec::new();
+    for run in 0..runs.max(1) {
+        let start = Instant::now();
+        let stats = gpu.render_tiles(&case.scene, &options, |first_row, tile| {
+            if run == 0 {
+                sampler.collect(first_row, &tile, &mut gpu_samples);
+            }
+            Ok::<(), GpuError>(())
+        })?;
+        let elapsed = start.elapsed().as_secs_f64() * 1e3;
+        wall.push(elapsed);
+        timestamps = stats.kernel_ns.is_some();
+        kernel.push(stats.kernel_ns.map_or(elapsed, |ns| ns as f64 / 1e6));
+    }
+    let peak_mib = peak_memory_mib();
+    let positions: Vec<(u32, u32)> = gpu_samples.iter().map(|s: &Sample| s.position).collect();
+    let reference = Reference::new(&case.scene, &options).pixels(&positions);
+    let ours = samples_frame(&options, &gpu_samples);
+    Ok(Row {
+        name: case.name.clone(),
+        triangle_test: case.triangle_test,
+        primitives: counts.total(),
+        triangles: counts.triangles,
+        width: case.width,
+        height: case.height,
+        kernel_ms: median(&mut kernel),
+        timestamps,
+        wall_ms: median(&mut wall),
+        runs: runs.max(1),
+        peak_mib,
+        samples: positions.len(),
+        errors: compare_frames(&ours, &reference, depth_range_of(&reference)),
+    })
+}
+
+/// How many pixels to check against the reference: the reference tests every triangle of a
+/// mesh whose box the ray enters, so bigger meshes get fewer samples (≈ 3·10⁸ triangle tests).
+fn sample_budget(triangles: usize) -> usize {
+    (300_000_000 / triangles.max(1)).clamp(256, 40_000)
+}
+
+/// A regular grid of pixels, every `stride`-th row and column (all pixels when stride is 1).
+struct Sampler {
+    width: u32,
+    stride: u32,
+}
+
+struct Sample {
+    position: (u32, u32),
+    hit: bool,
+    color: [f32; 3],
+    normal: [f32; 3],
+    depth: f32,
+}
+
+impl Sampler {
+    fn new(width: u32, height: u32, budget: usize) -> Sampler {
+        let pixels = width as f64 * height as f64;
+        let stride = (pixels / budget as f64).sqrt().ceil().max(1.0) as u32;
+        Sampler { width, stride }
+    }
+
+    fn picks(&self, x: u32) -> bool {
+        x % self.stride == self.stride / 2
+    }
+
+    fn collect(&self, first_row: u32, tile: &Frame, into: &mut Vec<Sample>) {
+        for r in 0..tile.height {
+            let row = first_row + r;
+            if !self.picks(row) {
+                continue;
+            }
+            for i in (0..self.width).filter(|&i| self.picks(i)) {
+                let k = (r * self.width + i) as usize;
+                into.push(Sample {
+                    position: (i, row),
+                    hit: tile.hit[k],
+                    color: tile.color[k],
+                    normal: tile.normal[k],
+                    depth: tile.depth[k],
+                });
+            }
+        }
+    }
+}
+
+fn samples_frame(options: &RenderOptions, samples: &[Sample]) -> Frame {
+    let mut frame = Frame::new(&RenderOptions { width: samples.len() as u32, height: 1, ..*options });
+    frame.hit = samples.iter().map(|s| s.hit).collect();
+    frame.color = samples.iter().map(|s| s.color).collect();
+    frame.normal = samples.iter().map(|s| s.normal).collect();
+    frame.depth = samples.iter().map(|s| s.depth).collect();
+    frame
+}
+
+fn median(values: &mut [f64]) -> f64 {
+    values.sort_by(f64::total_cmp);
+    let n = values.len();
+    if n % 2 == 1 {
+        values[n / 2]
+    } else {
+        (values[n / 2 - 1] + values[n / 2]) / 2.0
+    }
+}
+
+/// Linux: writing 5 to clear_refs resets the peak resident set size (VmHWM).
+fn reset_peak_memory() {
+    let _ = std::fs::write("/proc/self/clear_refs", "5");
+}
+
+fn peak_memory_mib() -> f64 {
+    let status = std::fs::read_to_string("/proc/self/status").unwrap_or_default();
+    status
+        .lines()
+        .find_map(|l| l.strip_prefix("VmHWM:"))
+        .and_then(|v| v.trim().trim_end_matches("kB").trim().parse::<f64>().ok())
+        .map_or(0.0, |kib| kib / 1024.0)
+}
+
+/// A scene that frames `mesh`: a perspective camera in front of its bounding box (+z side),
+/// one white light from the upper left, grey material.
+pub fn mesh_scene(name: &str, mesh: Mesh) -> Scene {
+    let lo = mesh.positions.iter().fold(DVec3::INFINITY, |a, &p| a.min(p));
+    let hi = mesh.positions.iter().fold(DVec3::NEG_INFINITY, |a, &p| a.max(p));
+    let (center, radius) = ((lo + hi) / 2.0, ((hi - lo).length() / 2.0).max(1e-9));
+    let angle: f64 = 40f64.to_radians();
+    let distance = radius / (angle / 2.0).sin();
+    Scene {
+        path: PathBuf::from(name),
+        camera: Camera {
+            projection: Projection::Perspective { angle },
+            center: center + DVec3::new(0.0, 0.0, distance),
+            direction: DVec3::new(0.0, 0.0, -1.0),
+            up: DVec3::Y,
+            location: Default::default(),
+        },
+        lights: vec![DirectionalLight { direction: DVec3::new(-0.5, -0.5, -1.0), color: DVec3::splat(0.9) }],
+        background: Background { color: DVec3::splat(0.2), ambient: DVec3::splat(0.1) },
+        materials: vec![Material { diffuse: DVec3::splat(0.8) }],
+        root: vec![Object { shape: Shape::Mesh { mesh: Arc::new(mesh), material: 0 }, location: Default::default() }],
+        warnings: Vec::new(),
+    }
+}
+
+/// The standard cases. `quick`: a few small ones that take seconds (CI runs these);
+/// otherwise the course scenes, the mesh scaling series and the image size series.
+pub fn standard_cases(corpus: &Path, quick: bool) -> Result<Vec<Case>, scene::SceneError> {
+    let course = corpus.join("a2");
+    let meshes = corpus.join("meshes");
+    let case = |name: &str, scene: Scene, size: u32| Case {
+        name: name.to_string(),
+        scene,
+        width: size,
+        height: size,
+        triangle_test: TriangleTest::default(),
+    };
+    let mut cases = Vec::new();
+    if quick {
+        for name in ["scene2_01_diffuse", "scene2_07_sphere_triangles", "scene2_15_crazy_transforms"] {
+            cases.push(case(name, scene::load_scene(&course.join(format!("{name}.txt")))?, 64));
+        }
+        cases.push(case("bunny_1k", mesh_scene("bunny_1k", scene::load_obj(&course.join("bunny_1k.obj"))?), 64));
+        return Ok(cases);
+    }
+    let mut course_files: Vec<PathBuf> = std::fs::read_dir(&course)
+        .map_err(|e| scene::SceneError::in_file(&course, e.to_string()))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| {
+            p.extension().is_some_and(|x| x == "txt")
+                && p.file_name().is_some_and(|n| n.to_string_lossy().starts_with("scene2_"))
+        })
+        .collect();
+    course_files.sort();
+    for path in course_files {
+        let name = path.file_stem().unwrap_or_default().to_string_lossy().into_owned();
+        cases.push(case(&name, scene::load_scene(&path)?, 200));
+    }
+    let mesh = |name: &str, path: PathBuf| -> Result<Scene, scene::SceneError> {
+        Ok(mesh_scene(name, scene::load_obj(&path)?))
+    };
+    let series = [
+        ("bunny_200", course.join("bunny_200.obj")),
+        ("bunny_1k", course.join("bunny_1k.obj")),
+        ("bunny_5k", meshes.join("bunny_5k.obj")),
+        ("bunny_40k", meshes.join("bunny_40k.obj")),
+        ("teapot_high", meshes.join("teapot_high.obj")),
+    ];
+    for (name, path) in series {
+        cases.push(case(name, mesh(name, path)?, 512));
+    }
+    let sphere = scene::generate::icosphere(DVec3::ZERO, 1.0, 8);
+    let name = format!("icosphere_{}", sphere.triangles.len());
+    cases.push(case(&name, mesh_scene(&name, sphere), 512));
+    let bunny = mesh("bunny_40k", meshes.join("bunny_40k.obj"))?;
+    for size in [200, 1024, 2048, 4096] {
+        cases.push(case("bunny_40k", bunny.clone(), size));
+    }
+    for test in [TriangleTest::Cramer, TriangleTest::Moller] {
+        cases.push(Case { triangle_test: test, ..case("bunny_40k", bunny.clone(), 2048) });
+    }
+    Ok(cases)
+}
+
+/// The rows as a Markdown table.
+pub fn markdown(rows: &[Row], adapter: &str) -> String {
+    let mut out = format!(
+        "Adapter: {adapter}. Kernel time from {}; medians of {} runs. Error against the f64 reference on the sampled pixels.\n\n",
+        if rows.iter().all(|r| r.timestamps) { "GPU timestamps" } else { "wall clock" },
+        rows.first().map_or(0, |r| r.runs)
+    );
+    out.push_str(
+        "| scene | triangle test | primitives | pixels | kernel ms | wall ms | Mrays/s | peak MiB | samples | >1 level | hit/miss | depth rel. max | normal max (rad) |\n\
+         | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n",
+    );
+    for r in rows {
+        let depth = r.output(Output::Depth).and_then(|e| e.relative_max).unwrap_or(0.0);
+        let normal = r.output(Output::Normals).map_or(0.0, |e| e.float_max);
+        let hit_miss = r.errors.first().map_or(0, |e| e.hit_mismatches);
+        let _ = writeln!(
+            out,
+            "| {} | {} | {} | {}² | {:.2} | {:.1} | {:.1} | {:.0} | {} | {:.3}% | {} | {:.1e} | {:.1e} |",
+            r.name,
+            r.triangle_test.name(),
+            r.primitives,
+            if r.width == r.height { r.width.to_string() } else { format!("{}×{}", r.width, r.height) },
+            r.kernel_ms,
+            r.wall_ms,
+            r.mrays_per_s(),
+            r.peak_mib,
+            r.samples,
+            100.0 * r.off_fraction(),
+            hit_miss,
+            depth,
+            normal
+        );
+    }
+    out
+}
+
+/// The rows as CSV, one line each.
+pub fn csv(rows: &[Row]) -> String {
+    let mut out = String::from("scene,triangle_test,primitives,triangles,width,height,kernel_ms,kernel_from_timestamps,wall_ms,mrays_per_s,peak_mib,samples,off_by_more_than_one_fraction,hit_mismatches,depth_rel_max,normal_angle_max_rad,color_float_max\n");
+    for r in rows {
+        let depth = r.output(Output::Depth).and_then(|e| e.relative_max).unwrap_or(0.0);
+        let normal = r.output(Output::Normals).map_or(0.0, |e| e.float_max);
+        let color = r.output(Output::Color).map_or(0.0, |e| e.float_max);
+        let hit_miss = r.errors.first().map_or(0, |e| e.hit_mismatches);
+        let _ = writeln!(
+            out,
+            "{},{},{},{},{},{},{:.4},{},{:.3},{:.3},{:.1},{},{:.6},{},{:.3e},{:.3e},{:.3e}",
+            r.name,
+            r.triangle_test.name(),
+            r.primitives,
+            r.triangles,
+            r.width,
+            r.height,
+            r.kernel_ms,
+            r.timestamps,
+            r.wall_ms,
+            r.mrays_per_s(),
+            r.peak_mib,
+            r.samples,
+            r.off_fraction(),
+            hit_miss,
+            depth,
+            normal,
+            color
+        );
+    }
+    out
+}
+
+/// Draws Mrays/s (log) against the largest relative depth error (log) of each row as a PNG.
+/// The depth error is the finest error measure the reference gives (f32 rounding shows in it
+/// even where no pixel changes level); rows with a pixel off by more than one level are red.
+pub fn plot(rows: &[Row], path: &Path) -> Result<(), crate::image_io::ImageError> {
+    use plotters::prelude::*;
+    const SIZE: (u32, u32) = (900, 600);
+    let fail = |e: String| crate::image_io::ImageError { path: path.to_path_buf(), message: e };
+    let mut buffer = vec![255u8; (SIZE.0 * SIZE.1 * 3) as usize];
+    {
+        let points: Vec<(f64, f64, bool, String)> = rows
+            .iter()
+            .map(|r| {
+                let depth = r.output(Output::Depth).and_then(|e| e.relative_max).unwrap_or(0.0).max(1e-9);
+                (r.mrays_per_s().max(1e-3), depth, r.off_fraction() > 0.0, r.name.clone())
+            })
+            .collect();
+        let (x_lo, x_hi) = bounds_log(points.iter().map(|p| p.0));
+        let (y_lo, y_hi) = bounds_log(points.iter().map(|p| p.1));
+        let root = BitMapBackend::with_buffer(&mut buffer, SIZE).into_drawing_area();
+        let mut chart = ChartBuilder::on(&root)
+            .caption("raycaster: speed against error (GPU vs f64 reference)", ("sans-serif", 22))
+            .margin(15)
+            .x_label_area_size(45)
+            .y_label_area_size(75)
+            .build_cartesian_2d((x_lo..x_hi).log_scale(), (y_lo..y_hi).log_scale())
+            .map_err(|e| fail(e.to_string()))?;
+        chart
+            .configure_mesh()
+            .x_desc("kernel throughput, Mrays/s")
+            .y_desc("largest relative depth error")
+            .draw()
+            .map_err(|e| fail(e.to_string()))?;
+        chart
+            .draw_series(points.iter().map(|(x, y, off, name)| {
+                let color = if *off { RED } else { BLUE };
+                EmptyElement::at((*x, *y))
+                    + Circle::new((0, 0), 4, color.filled())
+                    + Text::new(name.clone(), (6, -6), ("sans-serif", 11))
+            }))
+            .map_err(|e| fail(e.to_string()))?;
+        root.present().map_err(|e| fail(e.to_string()))?;
+    }
+    let image = image::RgbImage::from_raw(SIZE.0, SIZE.1, buffer).expect("sized buffer");
+    crate::image_io::write_image(path, &image)
+}
+
+/// A log-scale axis range around the values, a factor of 2 beyond each end.
+fn bounds_log(values: impl Iterator<Item = f64>) -> (f64, f64) {
+    let (lo, hi) = values.fold((f64::MAX, f64::MIN), |(lo, hi), v| (lo.min(v), hi.max(v)));
+    if lo > hi {
+        (0.1, 10.0)
+    } else {
+        (lo / 2.0, hi * 2.0)
+    }
+}
