@@ -20,6 +20,8 @@ override SHADE_BACK: bool = false;
 // spheres 0 = the textbook quadratic, 1 = the precise form of Ray Tracing Gems ch. 7.
 override TRIANGLE_TEST: u32 = 2u;
 override SPHERE_TEST: u32 = 1u;
+// Finite primitives through the bounding volume hierarchy (else flat loops over each kind).
+override USE_BVH: bool = false;
 
 const F32_MAX: f32 = 3.40282347e38;
 // The "no hit" distance: never less than any closest-so-far.
@@ -101,6 +103,15 @@ struct Light {
     _pad1: u32,
 }
 
+// A node of the hierarchy (src/bvh.rs): interior when count == 0, with children at first and
+// first + 1; a leaf holds prim_refs[first .. first + count].
+struct BvhNode {
+    min: vec3<f32>,
+    first: u32,
+    max: vec3<f32>,
+    count: u32,
+}
+
 struct PixelOut {
     color: vec3<f32>,
     hit: u32,
@@ -116,6 +127,18 @@ struct PixelOut {
 @group(0) @binding(5) var<storage, read> materials: array<vec4<f32>>;
 @group(0) @binding(6) var<storage, read> lights: array<Light>;
 @group(0) @binding(7) var<storage, read_write> pixels: array<PixelOut>;
+@group(0) @binding(8) var<storage, read> nodes: array<BvhNode>;
+// kind << 30 | index into that kind's array.
+@group(0) @binding(9) var<storage, read> prim_refs: array<u32>;
+
+const REF_TRIANGLE: u32 = 0u;
+const REF_SPHERE: u32 = 1u;
+const REF_ELLIPSOID: u32 = 2u;
+const REF_INDEX_MASK: u32 = 0x3fffffffu;
+// The hierarchy's depth bound (bvh::STACK_SIZE): the traversal stack cannot overflow.
+const STACK_SIZE: u32 = 32u;
+// 2·gamma(3) with gamma(n) = n·u/(1 − n·u), u = 2⁻²⁴ (bvh::SLAB_MARGIN).
+const SLAB_MARGIN: f32 = 3.5762793e-7;
 
 struct Ray {
     origin: vec3<f32>,
@@ -350,23 +373,7 @@ struct Closest {
 fn closest_hit(ray: Ray) -> Closest {
     let tmin = t_min();
     var best = Closest(NO_HIT, KIND_NONE, 0u);
-    if (HAS_SPHERES) {
-        for (var k = 0u; k < params.num_spheres; k++) {
-            let s = spheres[k];
-            let t = sphere_t(ray.origin - s.center, ray.direction, s.radius, tmin);
-            if (t < best.t) {
-                best = Closest(t, KIND_SPHERE, k);
-            }
-        }
-    }
-    if (HAS_ELLIPSOIDS) {
-        for (var k = 0u; k < params.num_ellipsoids; k++) {
-            let t = ellipsoid_t(ellipsoids[k], ray, tmin);
-            if (t < best.t) {
-                best = Closest(t, KIND_ELLIPSOID, k);
-            }
-        }
-    }
+    // Planes first: infinite, outside the hierarchy, and a near plane hit prunes it.
     if (HAS_PLANES) {
         for (var k = 0u; k < params.num_planes; k++) {
             let t = plane_t(planes[k], ray, tmin);
@@ -375,15 +382,134 @@ fn closest_hit(ray: Ray) -> Closest {
             }
         }
     }
+    // Only the watertight test reads the shear; otherwise the compiler drops it.
+    let shear = shear_for(ray.direction);
+    if (USE_BVH) {
+        return traverse(ray, shear, tmin, best);
+    }
+    if (HAS_SPHERES) {
+        for (var k = 0u; k < params.num_spheres; k++) {
+            best = try_sphere(k, ray, tmin, best);
+        }
+    }
+    if (HAS_ELLIPSOIDS) {
+        for (var k = 0u; k < params.num_ellipsoids; k++) {
+            best = try_ellipsoid(k, ray, tmin, best);
+        }
+    }
     if (HAS_TRIANGLES) {
-        // Only the watertight test reads the shear; the others leave it unused and the
-        // compiler drops it.
-        let shear = shear_for(ray.direction);
         for (var k = 0u; k < params.num_triangles; k++) {
-            let t = triangle_t(triangles[k], ray, shear, tmin);
-            if (t < best.t) {
-                best = Closest(t, KIND_TRIANGLE, k);
+            best = try_triangle(k, ray, shear, tmin, best);
+        }
+    }
+    return best;
+}
+
+fn try_sphere(k: u32, ray: Ray, tmin: f32, best: Closest) -> Closest {
+    let s = spheres[k];
+    let t = sphere_t(ray.origin - s.center, ray.direction, s.radius, tmin);
+    if (t < best.t) {
+        return Closest(t, KIND_SPHERE, k);
+    }
+    return best;
+}
+
+fn try_ellipsoid(k: u32, ray: Ray, tmin: f32, best: Closest) -> Closest {
+    let t = ellipsoid_t(ellipsoids[k], ray, tmin);
+    if (t < best.t) {
+        return Closest(t, KIND_ELLIPSOID, k);
+    }
+    return best;
+}
+
+fn try_triangle(k: u32, ray: Ray, shear: Shear, tmin: f32, best: Closest) -> Closest {
+    let t = triangle_t(triangles[k], ray, shear, tmin);
+    if (t < best.t) {
+        return Closest(t, KIND_TRIANGLE, k);
+    }
+    return best;
+}
+
+// Entry distance of the ray into a node's box within [tmin, tmax], or NO_HIT. Robust slab
+// test: Ize, "Robust BVH Ray Traversal", JCGT 2(2) 2013 — both ends widened by 2·gamma(3)
+// so that rounding never culls a box the exact ray meets (as bvh::ray_box_entry, which the
+// tests check against brute force). Axes the ray is parallel to are decided by whether the
+// origin lies within the slab, never by 0·∞.
+fn box_entry(node: BvhNode, ray: Ray, inv: vec3<f32>, parallel: vec3<bool>, tmin: f32, tmax: f32) -> f32 {
+    let towards = inv >= vec3<f32>(0.0);
+    var near = (select(node.max, node.min, towards) - ray.origin) * inv;
+    var far = (select(node.min, node.max, towards) - ray.origin) * inv;
+    let inside = node.min <= ray.origin & ray.origin <= node.max;
+    near = select(near, select(vec3<f32>(F32_MAX), vec3<f32>(-F32_MAX), inside), parallel);
+    far = select(far, select(vec3<f32>(-F32_MAX), vec3<f32>(F32_MAX), inside), parallel);
+    let n = max(max(near.x, near.y), near.z);
+    let f = min(min(far.x, far.y), far.z);
+    let entry = max(tmin, n * select(1.0 + SLAB_MARGIN, 1.0 - SLAB_MARGIN, n > 0.0));
+    let exit = min(tmax, f * select(1.0 - SLAB_MARGIN, 1.0 + SLAB_MARGIN, f > 0.0));
+    return select(NO_HIT, entry, entry <= exit);
+}
+
+fn try_ref(r: u32, ray: Ray, shear: Shear, tmin: f32, best: Closest) -> Closest {
+    let kind = r >> 30u;
+    let index = r & REF_INDEX_MASK;
+    var out = best;
+    if (HAS_TRIANGLES && kind == REF_TRIANGLE) {
+        out = try_triangle(index, ray, shear, tmin, out);
+    }
+    if (HAS_SPHERES && kind == REF_SPHERE) {
+        out = try_sphere(index, ray, tmin, out);
+    }
+    if (HAS_ELLIPSOIDS && kind == REF_ELLIPSOID) {
+        out = try_ellipsoid(index, ray, tmin, out);
+    }
+    return out;
+}
+
+// Closest hit through the hierarchy: a short fixed stack of (node, entry distance), the
+// nearer child visited first, a popped node skipped when a closer hit was found after it
+// was pushed (the traversal of bvh::Bvh::closest_hit).
+fn traverse(ray: Ray, shear: Shear, tmin: f32, start: Closest) -> Closest {
+    var best = start;
+    let parallel = ray.direction == vec3<f32>(0.0);
+    let inv = 1.0 / select(ray.direction, vec3<f32>(1.0), parallel);
+    var stack_node: array<u32, STACK_SIZE>;
+    var stack_entry: array<f32, STACK_SIZE>;
+    var len = 0u;
+    let root_entry = box_entry(nodes[0], ray, inv, parallel, tmin, best.t);
+    if (root_entry < best.t) {
+        stack_node[0] = 0u;
+        stack_entry[0] = root_entry;
+        len = 1u;
+    }
+    while (len > 0u) {
+        len -= 1u;
+        if (stack_entry[len] >= best.t) {
+            continue;
+        }
+        let node = nodes[stack_node[len]];
+        if (node.count > 0u) {
+            for (var k = node.first; k < node.first + node.count; k++) {
+                best = try_ref(prim_refs[k], ray, shear, tmin, best);
             }
+            continue;
+        }
+        let left = box_entry(nodes[node.first], ray, inv, parallel, tmin, best.t);
+        let right = box_entry(nodes[node.first + 1u], ray, inv, parallel, tmin, best.t);
+        let right_first = right < left;
+        let near_node = select(node.first, node.first + 1u, right_first);
+        let far_node = select(node.first + 1u, node.first, right_first);
+        let near_entry = min(left, right);
+        let far_entry = max(left, right);
+        // The farther one first, so that the nearer one is popped next.
+        if (far_entry < best.t) {
+            stack_node[len] = far_node;
+            stack_entry[len] = far_entry;
+            len += 1u;
+        }
+        if (near_entry < best.t) {
+            stack_node[len] = near_node;
+            stack_entry[len] = near_entry;
+            len += 1u;
         }
     }
     return best;

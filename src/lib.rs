@@ -8,6 +8,7 @@
 
 pub mod backend;
 pub mod bench;
+pub mod bvh;
 pub mod camera;
 pub mod cli;
 pub mod cpu;

@@ -2,6 +2,7 @@
 //! uploads or reads back has exactly the size and field offsets naga reports for its WGSL
 //! twin, so a field added on one side only cannot silently shift the others.
 
+use raycaster::bvh::BvhNode;
 use raycaster::gpu::buffers::{GpuEllipsoid, GpuLight, GpuPlane, GpuSphere, GpuTriangle, Params, PixelOut};
 use raycaster::gpu::SHADER_SOURCE;
 use std::mem::{offset_of, size_of};
@@ -115,6 +116,17 @@ fn host_structs_match_the_shader() {
     );
     check(
         &m,
+        "BvhNode",
+        size_of::<BvhNode>(),
+        &[
+            ("min", offset_of!(BvhNode, min)),
+            ("first", offset_of!(BvhNode, first)),
+            ("max", offset_of!(BvhNode, max)),
+            ("count", offset_of!(BvhNode, count)),
+        ],
+    );
+    check(
+        &m,
         "PixelOut",
         size_of::<PixelOut>(),
         &[
@@ -139,6 +151,8 @@ fn binding_strides_match() {
         (5, size_of::<[f32; 4]>()),
         (6, size_of::<GpuLight>()),
         (7, size_of::<PixelOut>()),
+        (8, size_of::<BvhNode>()),
+        (9, size_of::<u32>()),
     ];
     for (binding, rust_size) in expected {
         let (_, var) = m
@@ -152,5 +166,39 @@ fn binding_strides_match() {
             }
             ref other => panic!("binding {binding} is not an array: {other:?}"),
         }
+    }
+}
+
+/// The value of the shader's `const NAME` (a literal).
+fn shader_constant(module: &naga::Module, name: &str) -> naga::Literal {
+    let (_, constant) = module
+        .constants
+        .iter()
+        .find(|(_, c)| c.name.as_deref() == Some(name))
+        .unwrap_or_else(|| panic!("no const {name} in the shader"));
+    match module.global_expressions[constant.init] {
+        naga::Expression::Literal(literal) => literal,
+        ref other => panic!("{name} is not a literal: {other:?}"),
+    }
+}
+
+/// The kernel's copies of the hierarchy's constants equal the builder's: its stack holds
+/// the deepest tree the builder makes, and its box test widens by the same margin the CPU
+/// traversal was checked with.
+#[test]
+fn bvh_constants_match_the_builder() {
+    let m = module();
+    assert_eq!(shader_constant(&m, "STACK_SIZE"), naga::Literal::U32(raycaster::bvh::STACK_SIZE as u32));
+    match shader_constant(&m, "SLAB_MARGIN") {
+        naga::Literal::F32(v) => assert_eq!(v, raycaster::bvh::SLAB_MARGIN, "{v:e}"),
+        other => panic!("{other:?}"),
+    }
+    let refs = [
+        ("REF_TRIANGLE", raycaster::gpu::buffers::REF_TRIANGLE),
+        ("REF_SPHERE", raycaster::gpu::buffers::REF_SPHERE),
+        ("REF_ELLIPSOID", raycaster::gpu::buffers::REF_ELLIPSOID),
+    ];
+    for (name, value) in refs {
+        assert_eq!(shader_constant(&m, name), naga::Literal::U32(value), "{name}");
     }
 }

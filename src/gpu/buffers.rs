@@ -7,10 +7,12 @@
 //! non-uniform scale keeps a matrix (an [`Ellipsoid`]). Everything is moved so that the
 //! camera sits at the origin, in f64, before it is rounded to f32.
 
+use crate::bvh::{Aabb, Bvh, BvhNode};
 use crate::camera::PrimaryRays;
 use crate::scene::{Object, Scene, Shape};
 use bytemuck::{Pod, Zeroable};
-use glam::{DMat3, DMat4, DVec3};
+use glam::{DMat3, DMat4, DVec3, Vec3};
+use std::time::Instant;
 
 /// WGSL `Params`.
 #[repr(C)]
@@ -106,14 +108,41 @@ pub struct SceneBuffers {
     /// Diffuse colours, xyz used.
     pub materials: Vec<[f32; 4]>,
     pub lights: Vec<GpuLight>,
+    /// The hierarchy over spheres, ellipsoids and triangles, when the scene has enough of
+    /// them to profit ([`BVH_MIN_PRIMITIVES`]).
+    pub bvh: Option<GpuBvh>,
+    /// Bounds of each sphere and ellipsoid (f32, slightly padded), for the hierarchy.
+    sphere_bounds: Vec<Aabb>,
+    ellipsoid_bounds: Vec<Aabb>,
 }
 
+/// Below this many finite primitives the flat loops are as fast as the hierarchy (measured
+/// with `raycaster bench` on the course scenes; see the README).
+pub const BVH_MIN_PRIMITIVES: usize = 16;
+
+/// The hierarchy as the kernel reads it.
+#[derive(Clone, Debug, Default)]
+pub struct GpuBvh {
+    pub nodes: Vec<BvhNode>,
+    /// `kind << 30 | index` per leaf slot (kinds as in the kernel's `REF_*`).
+    pub prim_refs: Vec<u32>,
+    pub build_ms: f64,
+    pub depth: usize,
+}
+
+/// Primitive kinds in a `prim_refs` entry (the kernel's `REF_*` constants).
+pub const REF_TRIANGLE: u32 = 0;
+pub const REF_SPHERE: u32 = 1;
+pub const REF_ELLIPSOID: u32 = 2;
+
 impl SceneBuffers {
-    /// Flattens `scene` for a `width × height` image.
-    pub fn new(scene: &Scene, rays: &PrimaryRays) -> SceneBuffers {
+    /// Flattens `scene` for the image `rays` describes, with a hierarchy when it has at
+    /// least `bvh_min_primitives` spheres, ellipsoids and triangles.
+    pub fn new(scene: &Scene, rays: &PrimaryRays, bvh_min_primitives: usize) -> SceneBuffers {
         let mut buffers = SceneBuffers { orthographic: rays.orthographic, ..Default::default() };
         let to_camera = DMat4::from_translation(-rays.center);
         buffers.flatten(&scene.root, &to_camera);
+        buffers.bvh = buffers.build_bvh(bvh_min_primitives);
         buffers.materials = scene.materials.iter().map(|m| m.diffuse.as_vec3().extend(0.0).to_array()).collect();
         buffers.lights = scene
             .lights
@@ -142,6 +171,32 @@ impl SceneBuffers {
         buffers
     }
 
+    fn build_bvh(&self, min_primitives: usize) -> Option<GpuBvh> {
+        let finite = self.triangles.len() + self.spheres.len() + self.ellipsoids.len();
+        if finite < min_primitives.max(1) || finite > (1 << 30) {
+            return None;
+        }
+        let start = Instant::now();
+        let mut bounds = Vec::with_capacity(finite);
+        let mut refs = Vec::with_capacity(finite);
+        for (k, t) in self.triangles.iter().enumerate() {
+            bounds.push(Aabb::of_points(&[Vec3::from(t.v0), Vec3::from(t.v1), Vec3::from(t.v2)]));
+            refs.push(REF_TRIANGLE << 30 | k as u32);
+        }
+        for (k, b) in self.sphere_bounds.iter().enumerate() {
+            bounds.push(*b);
+            refs.push(REF_SPHERE << 30 | k as u32);
+        }
+        for (k, b) in self.ellipsoid_bounds.iter().enumerate() {
+            bounds.push(*b);
+            refs.push(REF_ELLIPSOID << 30 | k as u32);
+        }
+        let bvh = Bvh::build(&bounds);
+        let prim_refs = bvh.order.iter().map(|&p| refs[p as usize]).collect();
+        let depth = bvh.depth();
+        Some(GpuBvh { nodes: bvh.nodes, prim_refs, build_ms: start.elapsed().as_secs_f64() * 1e3, depth })
+    }
+
     /// Walks the tree with `matrix` mapping the current object space to camera-relative world
     /// space. The tree depth is bounded by the parser's nesting limit.
     fn flatten(&mut self, objects: &[Object], matrix: &DMat4) {
@@ -165,9 +220,11 @@ impl SceneBuffers {
     fn push_sphere(&mut self, matrix: &DMat4, center: DVec3, radius: f64, material: u32) {
         let linear = DMat3::from_mat4(*matrix);
         if let Some(scale) = similarity_scale(&linear) {
+            let (world_center, world_radius) = (matrix.transform_point3(center), radius * scale);
+            self.sphere_bounds.push(padded_box(world_center, DVec3::splat(world_radius)));
             self.spheres.push(GpuSphere {
-                center: f32x3(matrix.transform_point3(center)),
-                radius: (radius * scale) as f32,
+                center: f32x3(world_center),
+                radius: world_radius as f32,
                 material,
                 ..Default::default()
             });
@@ -177,6 +234,9 @@ impl SceneBuffers {
         // the kernel needs the inverse of that.
         let to_world = *matrix * DMat4::from_translation(center) * DMat4::from_scale(DVec3::splat(radius));
         let to_unit = to_world.inverse();
+        // The image of the unit sphere under A reaches |row i of A's linear part| along axis i.
+        let half = DVec3::from_array([0, 1, 2].map(|r| to_world.row(r).truncate().length()));
+        self.ellipsoid_bounds.push(padded_box(to_world.w_axis.truncate(), half));
         let rows = [0, 1, 2].map(|r| to_unit.row(r).as_vec4().to_array());
         self.ellipsoids.push(GpuEllipsoid { rows, material, ..Default::default() });
     }
@@ -203,6 +263,13 @@ impl SceneBuffers {
         }
         self.triangles.push(GpuTriangle { v0: a, material, v1: b, v2: c, ..Default::default() });
     }
+}
+
+/// The f32 box around `center ± half`, padded by a relative 1e-6 so that rounding to f32
+/// can never leave part of the curved surface outside it.
+fn padded_box(center: DVec3, half: DVec3) -> Aabb {
+    let pad = half + DVec3::splat(1e-6 * (center.abs().max_element() + half.max_element()));
+    Aabb { min: (center - pad).as_vec3(), max: (center + pad).as_vec3() }
 }
 
 /// `Some(s)` when `linear` is `s` times a rotation or reflection (columns orthogonal and of

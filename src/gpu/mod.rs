@@ -50,6 +50,7 @@ pub struct KernelConfig {
     pub shade_back: bool,
     pub triangle_test: TriangleTest,
     pub sphere_test: SphereTest,
+    pub use_bvh: bool,
 }
 
 impl KernelConfig {
@@ -64,11 +65,12 @@ impl KernelConfig {
             shade_back: options.shade_back,
             triangle_test: options.triangle_test,
             sphere_test: options.sphere_test,
+            use_bvh: buffers.bvh.is_some(),
         }
     }
 
     /// The values for `PipelineCompilationOptions::constants`.
-    pub fn constants(&self) -> [(&'static str, f64); 9] {
+    pub fn constants(&self) -> [(&'static str, f64); 10] {
         let b = |v: bool| if v { 1.0 } else { 0.0 };
         [
             ("HAS_SPHERES", b(self.has_spheres)),
@@ -80,6 +82,7 @@ impl KernelConfig {
             ("SHADE_BACK", b(self.shade_back)),
             ("TRIANGLE_TEST", self.triangle_test as u32 as f64),
             ("SPHERE_TEST", self.sphere_test as u32 as f64),
+            ("USE_BVH", b(self.use_bvh)),
         ]
     }
 }
@@ -96,6 +99,7 @@ pub struct GpuRenderer {
     pipelines: Mutex<HashMap<KernelConfig, wgpu::ComputePipeline>>,
     max_tile_bytes: u64,
     timestamps: bool,
+    bvh_min_primitives: usize,
 }
 
 /// What a render cost, as far as the GPU can tell.
@@ -106,6 +110,10 @@ pub struct RenderStats {
     pub kernel_ns: Option<u64>,
     /// Dispatches the image took.
     pub tiles: u32,
+    /// Time to build the hierarchy on the CPU, when the scene got one.
+    pub bvh_build_ms: Option<f64>,
+    /// Time to flatten the scene into buffers (BVH build included) and upload them.
+    pub prepare_ms: f64,
 }
 
 impl GpuRenderer {
@@ -147,7 +155,7 @@ impl GpuRenderer {
         });
         let bind_group_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("raycast bindings"),
-            entries: &(0..8).map(storage_entry).collect::<Vec<_>>(),
+            entries: &(0..10).map(storage_entry).collect::<Vec<_>>(),
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("raycast layout"),
@@ -165,6 +173,7 @@ impl GpuRenderer {
             pipelines: Mutex::new(HashMap::new()),
             max_tile_bytes: MAX_TILE_BYTES,
             timestamps: features.contains(wgpu::Features::TIMESTAMP_QUERY),
+            bvh_min_primitives: buffers::BVH_MIN_PRIMITIVES,
         })
     }
 
@@ -172,6 +181,12 @@ impl GpuRenderer {
     /// limits are lower); images taller than that render in several tiles.
     pub fn set_max_tile_bytes(&mut self, bytes: u64) {
         self.max_tile_bytes = bytes;
+    }
+
+    /// Scenes with at least this many finite primitives get a hierarchy (default
+    /// [`buffers::BVH_MIN_PRIMITIVES`]); `usize::MAX` turns it off, 1 forces it on.
+    pub fn set_bvh_min_primitives(&mut self, count: usize) {
+        self.bvh_min_primitives = count;
     }
 
     /// Which adapter this renderer runs on (name, backend, device type).
@@ -197,13 +212,19 @@ impl GpuRenderer {
         options: &RenderOptions,
         mut on_tile: impl FnMut(u32, Frame) -> Result<(), E>,
     ) -> Result<RenderStats, E> {
+        let start = std::time::Instant::now();
         let rays = PrimaryRays::new(&scene.camera, options.width, options.height)
             .expect("the parser rejects cameras whose up is parallel to their direction");
-        let buffers = SceneBuffers::new(scene, &rays);
+        let buffers = SceneBuffers::new(scene, &rays, self.bvh_min_primitives);
         let pipeline = self.pipeline(KernelConfig::new(&buffers, options));
         let inputs = self.upload(&buffers)?;
         let tile_rows = self.tile_rows(options.width)?;
-        let mut stats = RenderStats { kernel_ns: self.timestamps.then_some(0), tiles: 0 };
+        let mut stats = RenderStats {
+            kernel_ns: self.timestamps.then_some(0),
+            tiles: 0,
+            bvh_build_ms: buffers.bvh.as_ref().map(|b| b.build_ms),
+            prepare_ms: start.elapsed().as_secs_f64() * 1e3,
+        };
         let mut first_row = 0;
         while first_row < options.height {
             let rows = tile_rows.min(options.height - first_row);
@@ -274,6 +295,8 @@ impl GpuRenderer {
             triangles: storage("triangles", non_empty(&buffers.triangles))?,
             materials: storage("materials", non_empty(&buffers.materials))?,
             lights: storage("lights", non_empty(&buffers.lights))?,
+            nodes: storage("bvh nodes", non_empty(buffers.bvh.as_ref().map_or(&[][..], |b| &b.nodes)))?,
+            prim_refs: storage("bvh primitives", non_empty(buffers.bvh.as_ref().map_or(&[][..], |b| &b.prim_refs)))?,
         })
     }
 
@@ -314,6 +337,8 @@ impl GpuRenderer {
             &inputs.materials,
             &inputs.lights,
             &output,
+            &inputs.nodes,
+            &inputs.prim_refs,
         ];
         let entries: Vec<_> = bindings
             .iter()
@@ -363,6 +388,8 @@ struct SceneInputs {
     triangles: wgpu::Buffer,
     materials: wgpu::Buffer,
     lights: wgpu::Buffer,
+    nodes: wgpu::Buffer,
+    prim_refs: wgpu::Buffer,
 }
 
 fn storage_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {

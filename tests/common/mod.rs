@@ -2,6 +2,8 @@
 //! failing loudly when absent), and pixel comparisons.
 #![allow(dead_code)]
 
+pub mod hard;
+
 use raycaster::gpu::GpuRenderer;
 use std::path::PathBuf;
 use std::sync::OnceLock;
@@ -31,4 +33,5 @@ pub fn gpu() -> Option<&'static GpuRenderer> {
     }
 }
 
+#[allow(unused_imports)]
 pub use raycaster::metrics::{image_diff as pixel_diff, ImageDiff as PixelDiff};
