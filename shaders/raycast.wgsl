@@ -450,6 +450,10 @@ fn box_entry(node: BvhNode, ray: Ray, inv: vec3<f32>, parallel: vec3<bool>, tmin
 }
 
 fn try_ref(r: u32, ray: Ray, shear: Shear, tmin: f32, best: Closest) -> Closest {
+    // A hierarchy of triangles alone holds them in leaf order: the slot is the index.
+    if (!HAS_SPHERES && !HAS_ELLIPSOIDS) {
+        return try_triangle(r, ray, shear, tmin, best);
+    }
     let kind = r >> 30u;
     let index = r & REF_INDEX_MASK;
     var out = best;
@@ -463,6 +467,15 @@ fn try_ref(r: u32, ray: Ray, shear: Shear, tmin: f32, best: Closest) -> Closest 
         out = try_ellipsoid(index, ray, tmin, out);
     }
     return out;
+}
+
+// What leaf slot k holds: a prim_refs entry, or with triangles alone (reordered into leaf
+// order by the host) the triangle index itself, one load fewer.
+fn leaf_slot(k: u32) -> u32 {
+    if (!HAS_SPHERES && !HAS_ELLIPSOIDS) {
+        return k;
+    }
+    return prim_refs[k];
 }
 
 // Closest hit through the hierarchy: a short fixed stack of (node, entry distance), the
@@ -489,7 +502,7 @@ fn traverse(ray: Ray, shear: Shear, tmin: f32, start: Closest) -> Closest {
         let node = nodes[stack_node[len]];
         if (node.count > 0u) {
             for (var k = node.first; k < node.first + node.count; k++) {
-                best = try_ref(prim_refs[k], ray, shear, tmin, best);
+                best = try_ref(leaf_slot(k), ray, shear, tmin, best);
             }
             continue;
         }

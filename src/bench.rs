@@ -36,6 +36,10 @@ pub struct Row {
     pub triangles: usize,
     pub width: u32,
     pub height: u32,
+    /// Time to build the hierarchy, when the scene got one.
+    pub bvh_build_ms: Option<f64>,
+    /// Bytes of scene data on the GPU (primitives, hierarchy, materials, lights).
+    pub scene_bytes: u64,
     /// Median kernel time; from GPU timestamps when `timestamps`, else the render's wall time.
     pub kernel_ms: f64,
     pub timestamps: bool,
@@ -78,6 +82,8 @@ pub fn run_case(gpu: &GpuRenderer, case: &Case, runs: usize) -> Result<Row, GpuE
     let mut kernel = Vec::new();
     let mut wall = Vec::new();
     let mut timestamps = false;
+    let mut bvh_build_ms = None;
+    let mut scene_bytes = 0;
     let mut gpu_samples = Vec::new();
     for run in 0..runs.max(1) {
         let start = Instant::now();
@@ -90,6 +96,8 @@ pub fn run_case(gpu: &GpuRenderer, case: &Case, runs: usize) -> Result<Row, GpuE
         let elapsed = start.elapsed().as_secs_f64() * 1e3;
         wall.push(elapsed);
         timestamps = stats.kernel_ns.is_some();
+        bvh_build_ms = bvh_build_ms.or(stats.bvh_build_ms);
+        scene_bytes = stats.scene_bytes;
         kernel.push(stats.kernel_ns.map_or(elapsed, |ns| ns as f64 / 1e6));
     }
     let peak_mib = peak_memory_mib();
@@ -103,6 +111,8 @@ pub fn run_case(gpu: &GpuRenderer, case: &Case, runs: usize) -> Result<Row, GpuE
         triangles: counts.triangles,
         width: case.width,
         height: case.height,
+        bvh_build_ms,
+        scene_bytes,
         kernel_ms: median(&mut kernel),
         timestamps,
         wall_ms: median(&mut wall),
@@ -289,8 +299,8 @@ pub fn markdown(rows: &[Row], adapter: &str) -> String {
         rows.first().map_or(0, |r| r.runs)
     );
     out.push_str(
-        "| scene | triangle test | primitives | pixels | kernel ms | wall ms | Mrays/s | peak MiB | samples | >1 level | hit/miss | depth rel. max | normal max (rad) |\n\
-         | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n",
+        "| scene | triangle test | primitives | pixels | BVH build ms | kernel ms | wall ms | Mrays/s | scene MiB | peak MiB | samples | >1 level | hit/miss | depth rel. max | normal max (rad) |\n\
+         | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n",
     );
     for r in rows {
         let depth = r.output(Output::Depth).and_then(|e| e.relative_max).unwrap_or(0.0);
@@ -298,14 +308,16 @@ pub fn markdown(rows: &[Row], adapter: &str) -> String {
         let hit_miss = r.errors.first().map_or(0, |e| e.hit_mismatches);
         let _ = writeln!(
             out,
-            "| {} | {} | {} | {}² | {:.2} | {:.1} | {:.1} | {:.0} | {} | {:.3}% | {} | {:.1e} | {:.1e} |",
+            "| {} | {} | {} | {}² | {} | {:.2} | {:.1} | {:.1} | {:.2} | {:.0} | {} | {:.3}% | {} | {:.1e} | {:.1e} |",
             r.name,
             r.triangle_test.name(),
             r.primitives,
             if r.width == r.height { r.width.to_string() } else { format!("{}×{}", r.width, r.height) },
+            r.bvh_build_ms.map_or("-".to_string(), |ms| format!("{ms:.1}")),
             r.kernel_ms,
             r.wall_ms,
             r.mrays_per_s(),
+            r.scene_bytes as f64 / (1 << 20) as f64,
             r.peak_mib,
             r.samples,
             100.0 * r.off_fraction(),
@@ -319,7 +331,7 @@ pub fn markdown(rows: &[Row], adapter: &str) -> String {
 
 /// The rows as CSV, one line each.
 pub fn csv(rows: &[Row]) -> String {
-    let mut out = String::from("scene,triangle_test,primitives,triangles,width,height,kernel_ms,kernel_from_timestamps,wall_ms,mrays_per_s,peak_mib,samples,off_by_more_than_one_fraction,hit_mismatches,depth_rel_max,normal_angle_max_rad,color_float_max\n");
+    let mut out = String::from("scene,triangle_test,primitives,triangles,width,height,bvh_build_ms,scene_bytes,kernel_ms,kernel_from_timestamps,wall_ms,mrays_per_s,peak_mib,samples,off_by_more_than_one_fraction,hit_mismatches,depth_rel_max,normal_angle_max_rad,color_float_max\n");
     for r in rows {
         let depth = r.output(Output::Depth).and_then(|e| e.relative_max).unwrap_or(0.0);
         let normal = r.output(Output::Normals).map_or(0.0, |e| e.float_max);
@@ -327,13 +339,15 @@ pub fn csv(rows: &[Row]) -> String {
         let hit_miss = r.errors.first().map_or(0, |e| e.hit_mismatches);
         let _ = writeln!(
             out,
-            "{},{},{},{},{},{},{:.4},{},{:.3},{:.3},{:.1},{},{:.6},{},{:.3e},{:.3e},{:.3e}",
+            "{},{},{},{},{},{},{},{},{:.4},{},{:.3},{:.3},{:.1},{},{:.6},{},{:.3e},{:.3e},{:.3e}",
             r.name,
             r.triangle_test.name(),
             r.primitives,
             r.triangles,
             r.width,
             r.height,
+            r.bvh_build_ms.map_or(String::new(), |ms| format!("{ms:.3}")),
+            r.scene_bytes,
             r.kernel_ms,
             r.timestamps,
             r.wall_ms,

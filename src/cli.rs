@@ -39,11 +39,11 @@ raycaster batch FILE [--backend B]
   skipped. A failing line is reported with its number and the rest still run; the exit
   status is then 1.
 
-raycaster bench [--quick] [--runs N] [--out DIR] [--corpus DIR]
+raycaster bench [--quick] [--runs N] [--out DIR] [--corpus DIR] [--only NAME]
   Times the GPU kernel on the course scenes, larger meshes and image sizes, with the error
   against the f64 reference for each row; prints a Markdown table and writes DIR/bench.csv
   and DIR/bench.png (default DIR target/bench, corpus ../shared/mit6837, 5 runs).
-  --quick: a few small cases, seconds in all.
+  --quick: a few small cases, seconds in all. --only: the cases whose name contains NAME.
 
 raycaster compare ... [--max-diff-pixels N]
   Renders the outputs named with the GPU and with the f64 reference, writes no file, and
@@ -113,6 +113,8 @@ pub struct BenchArgs {
     pub out: PathBuf,
     /// The course corpus (`a2/`, `meshes/`).
     pub corpus: PathBuf,
+    /// Only the cases whose name contains this.
+    pub only: Option<String>,
 }
 
 /// A bad command line, as one line of text.
@@ -233,6 +235,7 @@ fn parse_bench(args: &[OsString]) -> Result<Command, UsageError> {
         runs: 5,
         out: PathBuf::from("target/bench"),
         corpus: PathBuf::from("../shared/mit6837"),
+        only: None,
     };
     while let Some(raw) = values.next_raw() {
         let text = raw.to_string_lossy().into_owned();
@@ -240,6 +243,9 @@ fn parse_bench(args: &[OsString]) -> Result<Command, UsageError> {
             Some("quick") => bench.quick = true,
             Some("out") => bench.out = values.path(&text)?,
             Some("corpus") => bench.corpus = values.path(&text)?,
+            Some("only") => {
+                bench.only = Some(values.take(&text, "a part of a case name")?.to_string_lossy().into_owned())
+            }
             Some("runs") => {
                 let value = values.take(&text, "a number of runs")?;
                 let text_value = value.to_string_lossy();

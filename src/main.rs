@@ -87,7 +87,10 @@ fn bench(args: &cli::BenchArgs) -> ExitCode {
     use raycaster::bench;
     let Some(Backend::Gpu(gpu)) = open_backend(BackendChoice::Gpu) else { return ExitCode::FAILURE };
     let cases = match bench::standard_cases(&args.corpus, args.quick) {
-        Ok(cases) => cases,
+        Ok(cases) => cases
+            .into_iter()
+            .filter(|c| args.only.as_ref().is_none_or(|o| c.name.contains(o.as_str())))
+            .collect::<Vec<_>>(),
         Err(e) => {
             eprintln!("raycaster: bench: {e}");
             return ExitCode::FAILURE;

@@ -241,3 +241,34 @@ fn batch_runs_every_line_and_reports_failures() {
     assert!(dir.path().join("a.tga").exists() && dir.path().join("c.png").exists());
     assert!(!dir.path().join("b.tga").exists());
 }
+
+/// The bench's quick version runs in seconds and writes a table, a CSV and a plot whose
+/// rows carry both a speed and an error (so the bench cannot rot unnoticed).
+#[test]
+fn bench_quick_writes_table_csv_and_plot() {
+    if common::gpu().is_none() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let corpus = common::corpus();
+    let result =
+        raycaster(&["bench", "--quick", "--runs", "1", "--out", path_str(dir.path()), "--corpus", path_str(&corpus)]);
+    assert!(result.status.success(), "{}", stderr(&result));
+    let table = String::from_utf8_lossy(&result.stdout);
+    assert!(table.contains("| scene2_07_sphere_triangles |"), "{table}");
+    let csv = std::fs::read_to_string(dir.path().join("bench.csv")).unwrap();
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let column = |name: &str| header.iter().position(|h| *h == name).unwrap_or_else(|| panic!("no column {name}"));
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows.len(), 4, "{csv}");
+    for row in &rows {
+        let mrays: f64 = row[column("mrays_per_s")].parse().unwrap();
+        let off: f64 = row[column("off_by_more_than_one_fraction")].parse().unwrap();
+        let samples: usize = row[column("samples")].parse().unwrap();
+        assert!(mrays > 0.0 && mrays.is_finite(), "{row:?}");
+        assert!(samples > 0 && off <= 0.001, "{row:?}");
+    }
+    let png = std::fs::read(dir.path().join("bench.png")).unwrap();
+    assert_eq!(&png[1..4], b"PNG");
+}

@@ -116,16 +116,21 @@ pub struct SceneBuffers {
     ellipsoid_bounds: Vec<Aabb>,
 }
 
-/// Below this many finite primitives the flat loops are as fast as the hierarchy (measured
-/// with `raycaster bench` on the course scenes; see the README).
-pub const BVH_MIN_PRIMITIVES: usize = 16;
+/// Below this many finite primitives the flat loops beat the hierarchy. Kernel ms at 200²
+/// on lavapipe, hierarchy against flat (`raycaster bench --only scene2` with the threshold
+/// at 1 and at ∞): 1 sphere 2.5 / 0.56, 6 primitives 2.8 / 1.2, 12 (the cube) 1.65 / 2.05,
+/// 24: 2.4 / 3.6, 48: 2.8 / 6.6, bunny_1k 4.1 / 127.
+pub const BVH_MIN_PRIMITIVES: usize = 8;
 
 /// The hierarchy as the kernel reads it.
 #[derive(Clone, Debug, Default)]
 pub struct GpuBvh {
     pub nodes: Vec<BvhNode>,
-    /// `kind << 30 | index` per leaf slot (kinds as in the kernel's `REF_*`).
+    /// `kind << 30 | index` per leaf slot (kinds as in the kernel's `REF_*`); empty when the
+    /// hierarchy holds triangles alone, which are then stored in leaf order instead.
     pub prim_refs: Vec<u32>,
+    /// Leaf slot → primitive (the builder's order).
+    pub order: Vec<u32>,
     pub build_ms: f64,
     pub depth: usize,
 }
@@ -143,6 +148,9 @@ impl SceneBuffers {
         let to_camera = DMat4::from_translation(-rays.center);
         buffers.flatten(&scene.root, &to_camera);
         buffers.bvh = buffers.build_bvh(bvh_min_primitives);
+        if let Some(bvh) = buffers.bvh.as_ref().filter(|b| b.prim_refs.is_empty()) {
+            buffers.triangles = bvh.order.iter().map(|&p| buffers.triangles[p as usize]).collect();
+        }
         buffers.materials = scene.materials.iter().map(|m| m.diffuse.as_vec3().extend(0.0).to_array()).collect();
         buffers.lights = scene
             .lights
@@ -192,9 +200,20 @@ impl SceneBuffers {
             refs.push(REF_ELLIPSOID << 30 | k as u32);
         }
         let bvh = Bvh::build(&bounds);
-        let prim_refs = bvh.order.iter().map(|&p| refs[p as usize]).collect();
         let depth = bvh.depth();
-        Some(GpuBvh { nodes: bvh.nodes, prim_refs, build_ms: start.elapsed().as_secs_f64() * 1e3, depth })
+        let prim_refs = if self.spheres.is_empty() && self.ellipsoids.is_empty() {
+            // Triangles alone: the kernel reads them in leaf order directly (see `leaf_slot`).
+            Vec::new()
+        } else {
+            bvh.order.iter().map(|&p| refs[p as usize]).collect()
+        };
+        Some(GpuBvh {
+            nodes: bvh.nodes,
+            prim_refs,
+            order: bvh.order,
+            build_ms: start.elapsed().as_secs_f64() * 1e3,
+            depth,
+        })
     }
 
     /// Walks the tree with `matrix` mapping the current object space to camera-relative world
