@@ -62,6 +62,19 @@ impl Row {
         self.pixels() as f64 / (self.kernel_ms * 1e3)
     }
 
+    /// The scene's name, with the image size and the triangle test where they are not the
+    /// course's 200² and the default.
+    pub fn label(&self) -> String {
+        let mut label = self.name.clone();
+        if (self.width, self.height) != (200, 200) {
+            label.push_str(&format!(" {}×{}", self.width, self.height));
+        }
+        if self.triangle_test != TriangleTest::default() {
+            label.push_str(&format!(" ({})", self.triangle_test.name()));
+        }
+        label
+    }
+
     fn output(&self, output: Output) -> Option<&OutputErrors> {
         self.errors.iter().find(|e| e.output == output)
     }
@@ -377,7 +390,7 @@ pub fn plot(rows: &[Row], path: &Path) -> Result<(), crate::image_io::ImageError
             .iter()
             .map(|r| {
                 let depth = r.output(Output::Depth).and_then(|e| e.relative_max).unwrap_or(0.0).max(1e-9);
-                (r.mrays_per_s().max(1e-3), depth, r.off_fraction() > 0.0, r.name.clone())
+                (r.mrays_per_s().max(1e-3), depth, r.off_fraction() > 0.0, r.label())
             })
             .collect();
         let (x_lo, x_hi) = bounds_log(points.iter().map(|p| p.0));
@@ -392,6 +405,7 @@ pub fn plot(rows: &[Row], path: &Path) -> Result<(), crate::image_io::ImageError
             .map_err(|e| fail(e.to_string()))?;
         chart
             .configure_mesh()
+            .y_label_formatter(&|y| format!("{y:.0e}"))
             .x_desc("kernel throughput, Mrays/s")
             .y_desc("largest relative depth error")
             .draw()

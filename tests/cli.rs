@@ -272,3 +272,23 @@ fn bench_quick_writes_table_csv_and_plot() {
     let png = std::fs::read(dir.path().join("bench.png")).unwrap();
     assert_eq!(&png[1..4], b"PNG");
 }
+
+/// `compare` prints the error table and enforces --max-diff-pixels: the default kernel
+/// passes on the far sphere, the textbook quadratic does not.
+#[test]
+fn compare_reports_and_enforces_the_limit() {
+    if common::gpu().is_none() {
+        return;
+    }
+    let scene = "scenes/hard/far_sphere.txt";
+    let base = ["compare", "-input", scene, "-size", "100", "100", "-output", "o.tga", "-normals", "n.tga"];
+    let good = raycaster(&[&base[..], &["--max-diff-pixels", "10"]].concat());
+    let table = String::from_utf8_lossy(&good.stdout);
+    assert!(good.status.success(), "{}{}", table, stderr(&good));
+    assert!(table.contains("| colour |") && table.contains("| normals |"), "{table}");
+    let bad = raycaster(&[&base[..], &["--max-diff-pixels", "10", "--sphere-test", "naive"]].concat());
+    assert_eq!(bad.status.code(), Some(1), "{}", String::from_utf8_lossy(&bad.stdout));
+    assert!(stderr(&bad).contains("exceeds the limit"), "{}", stderr(&bad));
+    // compare writes no file.
+    assert!(!Path::new(env!("CARGO_MANIFEST_DIR")).join("o.tga").exists());
+}

@@ -144,6 +144,23 @@ fn judge(case: &Case, ours: &Frame, reference: &Frame, other: Option<&Frame>) ->
     }
 }
 
+/// One row of the error table: the default variant against the reference of the same scene.
+fn errors_row(name: &str, ours: &Frame, reference: &Frame, depth: (f32, f32)) -> String {
+    let errors = compare_frames(ours, reference, depth);
+    let of = |o: Output| errors.iter().find(|e| e.output == o).unwrap();
+    let (colour, normals, depth) = (of(Output::Color), of(Output::Normals), of(Output::Depth));
+    format!(
+        "| {name} | {} | {} | {} | {} | {:.1e} | {:.1e} | {} |\n",
+        colour.image.off_by_more_than_one,
+        normals.image.off_by_more_than_one,
+        depth.image.off_by_more_than_one,
+        colour.hit_mismatches,
+        depth.relative_max.unwrap_or(0.0),
+        normals.float_max,
+        colour.non_finite + normals.non_finite + depth.non_finite
+    )
+}
+
 fn render_reference(scene: &Scene, size: u32) -> Frame {
     raycaster::cpu::render(scene, &RenderOptions::all(size, size))
 }
@@ -153,6 +170,9 @@ fn hard_cases_per_variant() {
     let Some(gpu) = common::gpu() else { return };
     let names: Vec<String> = VARIANTS.iter().map(|(t, s)| format!("{}/{}", t.name(), s.name())).collect();
     let mut table = format!("| case | {} |\n| --- |{}\n", names.join(" | "), " ---: |".repeat(VARIANTS.len()));
+    let mut errors_table = String::from(
+        "| case | colour >1 | normals >1 | depth >1 | hit/miss | depth rel. max | normal max (rad) | NaN/inf |\n| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n",
+    );
     let mut surprises = Vec::new();
     for case in cases() {
         let (_dir, scene) = load_hard_ok(case.scene);
@@ -164,6 +184,9 @@ fn hard_cases_per_variant() {
         let mut cells = Vec::new();
         for (k, variant) in VARIANTS.iter().enumerate() {
             let ours = gpu.render(&scene, &options(case.size, *variant)).unwrap();
+            if k == 0 {
+                errors_table.push_str(&errors_row(case.scene, &ours, &reference, case.depth));
+            }
             let (failing, passes) = judge(&case, &ours, &reference, other.as_ref());
             cells.push(format!("{} {failing}", if passes { "pass" } else { "FAIL" }));
             if passes != case.expected[k] {
@@ -178,6 +201,7 @@ fn hard_cases_per_variant() {
         table.push_str(&format!("| {} | {} |\n", case.scene, cells.join(" | ")));
     }
     println!("Failing pixels per hard case and kernel variant (criteria in tests/hard_cases.rs):\n{table}");
+    println!("\nThe default variant against the f64 reference of the same scene:\n{errors_table}");
     assert!(surprises.is_empty(), "{surprises:#?}");
 }
 
