@@ -75,6 +75,21 @@ impl Row {
         label
     }
 
+    /// Sampled pixels one render hits and the other misses.
+    pub fn hit_mismatches(&self) -> usize {
+        self.errors.first().map_or(0, |e| e.hit_mismatches)
+    }
+
+    /// The largest |Δt| / |t| on the sample.
+    pub fn depth_relative_max(&self) -> f64 {
+        self.output(Output::Depth).and_then(|e| e.relative_max).unwrap_or(0.0)
+    }
+
+    /// The largest angle between the GPU's and the reference's normal, in radians.
+    pub fn normal_angle_max(&self) -> f64 {
+        self.output(Output::Normals).map_or(0.0, |e| e.float_max)
+    }
+
     fn output(&self, output: Output) -> Option<&OutputErrors> {
         self.errors.iter().find(|e| e.output == output)
     }
@@ -316,9 +331,6 @@ pub fn markdown(rows: &[Row], adapter: &str) -> String {
          | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n",
     );
     for r in rows {
-        let depth = r.output(Output::Depth).and_then(|e| e.relative_max).unwrap_or(0.0);
-        let normal = r.output(Output::Normals).map_or(0.0, |e| e.float_max);
-        let hit_miss = r.errors.first().map_or(0, |e| e.hit_mismatches);
         let _ = writeln!(
             out,
             "| {} | {} | {} | {}² | {} | {:.2} | {:.1} | {:.1} | {:.2} | {:.0} | {} | {:.3}% | {} | {:.1e} | {:.1e} |",
@@ -334,9 +346,9 @@ pub fn markdown(rows: &[Row], adapter: &str) -> String {
             r.peak_mib,
             r.samples,
             100.0 * r.off_fraction(),
-            hit_miss,
-            depth,
-            normal
+            r.hit_mismatches(),
+            r.depth_relative_max(),
+            r.normal_angle_max()
         );
     }
     out
@@ -346,10 +358,6 @@ pub fn markdown(rows: &[Row], adapter: &str) -> String {
 pub fn csv(rows: &[Row]) -> String {
     let mut out = String::from("scene,triangle_test,primitives,triangles,width,height,bvh_build_ms,scene_bytes,kernel_ms,kernel_from_timestamps,wall_ms,mrays_per_s,peak_mib,samples,off_by_more_than_one_fraction,hit_mismatches,depth_rel_max,normal_angle_max_rad,color_float_max\n");
     for r in rows {
-        let depth = r.output(Output::Depth).and_then(|e| e.relative_max).unwrap_or(0.0);
-        let normal = r.output(Output::Normals).map_or(0.0, |e| e.float_max);
-        let color = r.output(Output::Color).map_or(0.0, |e| e.float_max);
-        let hit_miss = r.errors.first().map_or(0, |e| e.hit_mismatches);
         let _ = writeln!(
             out,
             "{},{},{},{},{},{},{},{},{:.4},{},{:.3},{:.3},{:.1},{},{:.6},{},{:.3e},{:.3e},{:.3e}",
@@ -368,10 +376,10 @@ pub fn csv(rows: &[Row]) -> String {
             r.peak_mib,
             r.samples,
             r.off_fraction(),
-            hit_miss,
-            depth,
-            normal,
-            color
+            r.hit_mismatches(),
+            r.depth_relative_max(),
+            r.normal_angle_max(),
+            r.output(Output::Color).map_or(0.0, |e| e.float_max)
         );
     }
     out
@@ -389,7 +397,7 @@ pub fn plot(rows: &[Row], path: &Path) -> Result<(), crate::image_io::ImageError
         let points: Vec<(f64, f64, bool, String)> = rows
             .iter()
             .map(|r| {
-                let depth = r.output(Output::Depth).and_then(|e| e.relative_max).unwrap_or(0.0).max(1e-9);
+                let depth = r.depth_relative_max().max(1e-9);
                 (r.mrays_per_s().max(1e-3), depth, r.off_fraction() > 0.0, r.label())
             })
             .collect();

@@ -92,7 +92,7 @@ enum Encoder {
     /// Uncompressed true-colour TGA with the course's bottom-left origin: rows are placed
     /// by seeking, so tiles can arrive top first.
     Tga(BufWriter<std::fs::File>),
-    Png(png::StreamWriter<'static, BufWriter<std::fs::File>>),
+    Png(Box<png::StreamWriter<'static, BufWriter<std::fs::File>>>),
 }
 
 /// TGA header length (no image id, no colour map).
@@ -116,7 +116,9 @@ impl ImageFile {
         let file = temp.as_file().try_clone().map_err(|e| fail(e.to_string()))?;
         let encoder = match format {
             ImageFormat::Tga => Encoder::Tga(tga_start(file, width, height).map_err(|e| fail(e.to_string()))?),
-            ImageFormat::Png => Encoder::Png(png_start(file, width, height).map_err(|e| fail(e.to_string()))?),
+            ImageFormat::Png => {
+                Encoder::Png(Box::new(png_start(file, width, height).map_err(|e| fail(e.to_string()))?))
+            }
         };
         Ok(ImageFile { path: path.to_path_buf(), temp, encoder, width, height, rows_written: 0 })
     }

@@ -58,7 +58,7 @@ pub fn intersect_triangle(vertices: &[DVec3; 3], ray: &Ray, t_min: f64, t_max: f
     let alpha = -ray.direction.dot(oc.cross(e2)) / det;
     let beta = -ray.direction.dot(e1.cross(oc)) / det;
     let inside = alpha >= 0.0 && beta >= 0.0 && alpha + beta <= 1.0;
-    if !inside || !(t > t_min && t < t_max) {
+    if !(inside && t > t_min && t < t_max) {
         return None;
     }
     let normal = (b - a).cross(c - a).try_normalize()?;

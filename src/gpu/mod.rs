@@ -267,7 +267,7 @@ impl GpuRenderer {
     /// binding limit and our own cap, and the dispatch size limit.
     fn tile_rows(&self, width: u32) -> Result<u32, GpuError> {
         let row_bytes = width as u64 * std::mem::size_of::<PixelOut>() as u64;
-        let adapter_budget = (self.limits.max_storage_buffer_binding_size as u64).min(self.limits.max_buffer_size);
+        let adapter_budget = self.limits.max_storage_buffer_binding_size.min(self.limits.max_buffer_size);
         let max_groups = self.limits.max_compute_workgroups_per_dimension as u64;
         if row_bytes > adapter_budget || (width as u64).div_ceil(WORKGROUP as u64) > max_groups {
             return Err(GpuError::TooLarge(format!("an image {width} pixels wide exceeds the adapter's limits")));
@@ -279,7 +279,7 @@ impl GpuRenderer {
     }
 
     fn upload(&self, buffers: &SceneBuffers) -> Result<SceneInputs, GpuError> {
-        let limit = self.limits.max_storage_buffer_binding_size as u64;
+        let limit = self.limits.max_storage_buffer_binding_size;
         let storage = |label: &str, bytes: &[u8]| -> Result<wgpu::Buffer, GpuError> {
             if bytes.len() as u64 > limit {
                 return Err(GpuError::TooLarge(format!(
