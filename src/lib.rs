@@ -5,6 +5,24 @@
 //! the WGSL kernel) or [`cpu`] (the reference, which walks the model itself) →
 //! [`render::Frame`] (float buffers) → [`image_io`] (8-bit images, TGA or PNG).
 //! [`cli`] and [`job`] are the command line's layer over that.
+//!
+//! ```no_run
+//! use raycaster::{gpu::GpuRenderer, image_io, metrics, render::RenderOptions, scene};
+//!
+//! # fn main() -> Result<(), Box<dyn std::error::Error>> {
+//! let scene = scene::load_scene("scenes/triangles.txt".as_ref())?;
+//! let options = RenderOptions::all(320, 240);
+//! let gpu = GpuRenderer::new()?; // once per process; renders any number of scenes
+//! let frame = gpu.render(&scene, &options)?; // float colour, normal and depth
+//! image_io::write_image("out.png".as_ref(), &image_io::color_image(&frame))?;
+//!
+//! // The f64 reference, and what the GPU's f32 costs against it.
+//! let reference = raycaster::cpu::render(&scene, &options);
+//! let depth_range = metrics::depth_range_of(&reference);
+//! print!("{}", metrics::errors_table(&metrics::compare_frames(&frame, &reference, depth_range)));
+//! # Ok(())
+//! # }
+//! ```
 
 pub mod backend;
 pub mod bench;

@@ -73,3 +73,24 @@ fn incomplete_file_is_refused() {
     assert!(file.finish().is_err());
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
 }
+
+/// Each combination of outputs packs a different pixel layout; every one decodes to the
+/// same values as the render with all outputs, and leaves the others empty.
+#[test]
+fn every_output_combination_decodes_the_same() {
+    let Some(gpu) = common::gpu() else { return };
+    let all = gpu.render(&scene(), &RenderOptions::all(24, 16)).unwrap();
+    for mask in 1..8u32 {
+        let options = RenderOptions {
+            color: mask & 1 != 0,
+            normals: mask & 2 != 0,
+            depth: mask & 4 != 0,
+            ..RenderOptions::all(24, 16)
+        };
+        let frame = gpu.render(&scene(), &options).unwrap();
+        assert_eq!(frame.hit, all.hit, "outputs {mask:03b}");
+        assert_eq!(frame.color, if options.color { all.color.clone() } else { vec![] }, "outputs {mask:03b}");
+        assert_eq!(frame.normal, if options.normals { all.normal.clone() } else { vec![] }, "outputs {mask:03b}");
+        assert_eq!(frame.depth, if options.depth { all.depth.clone() } else { vec![] }, "outputs {mask:03b}");
+    }
+}

@@ -91,11 +91,8 @@ struct PixelResult {
 struct Tracer<'a> {
     scene: &'a Scene,
     /// Bounding boxes of meshes, keyed by the mesh's address (meshes are shared by `Arc`).
-    mesh_bounds: HashMap<*const Mesh, (DVec3, DVec3)>,
+    mesh_bounds: HashMap<usize, (DVec3, DVec3)>,
 }
-
-// The raw pointers are only map keys, never dereferenced.
-unsafe impl Sync for Tracer<'_> {}
 
 impl<'a> Tracer<'a> {
     fn new(scene: &'a Scene) -> Self {
@@ -192,7 +189,7 @@ impl<'a> Tracer<'a> {
     }
 
     fn intersect_mesh(&self, mesh: &Mesh, ray: &Ray, t_min: f64, t_max: f64) -> Option<(f64, DVec3)> {
-        let (lo, hi) = self.mesh_bounds[&(mesh as *const Mesh)];
+        let (lo, hi) = self.mesh_bounds[&mesh_key(mesh)];
         if !ray_meets_box(ray, lo, hi, t_min, t_max) {
             return None;
         }
@@ -207,7 +204,12 @@ impl<'a> Tracer<'a> {
     }
 }
 
-fn collect_mesh_bounds(objects: &[Object], bounds: &mut HashMap<*const Mesh, (DVec3, DVec3)>) {
+/// A mesh's identity for the bounds map: its address (only compared, never dereferenced).
+fn mesh_key(mesh: &Mesh) -> usize {
+    mesh as *const Mesh as usize
+}
+
+fn collect_mesh_bounds(objects: &[Object], bounds: &mut HashMap<usize, (DVec3, DVec3)>) {
     for object in objects {
         match &object.shape {
             Shape::Group(children) => collect_mesh_bounds(children, bounds),
@@ -215,7 +217,7 @@ fn collect_mesh_bounds(objects: &[Object], bounds: &mut HashMap<*const Mesh, (DV
             Shape::Mesh { mesh, .. } => {
                 let lo = mesh.positions.iter().fold(DVec3::INFINITY, |a, &p| a.min(p));
                 let hi = mesh.positions.iter().fold(DVec3::NEG_INFINITY, |a, &p| a.max(p));
-                bounds.insert(std::sync::Arc::as_ptr(mesh), (lo, hi));
+                bounds.insert(mesh_key(mesh), (lo, hi));
             }
             _ => {}
         }

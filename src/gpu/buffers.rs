@@ -9,6 +9,7 @@
 
 use crate::bvh::{Aabb, Bvh, BvhNode};
 use crate::camera::PrimaryRays;
+use crate::render::{Frame, RenderOptions};
 use crate::scene::{Object, Scene, Shape};
 use bytemuck::{Pod, Zeroable};
 use glam::{DMat3, DMat4, DVec3, Vec3};
@@ -27,7 +28,7 @@ pub struct Params {
     pub background: [f32; 3],
     pub tile_rows: u32,
     pub ambient: [f32; 3],
-    pub num_lights: u32,
+    pub _pad0: u32,
     pub num_spheres: u32,
     pub num_ellipsoids: u32,
     pub num_planes: u32,
@@ -85,14 +86,46 @@ pub struct GpuLight {
     pub _pad1: u32,
 }
 
-/// WGSL `PixelOut`: what the kernel writes per pixel.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct PixelOut {
-    pub color: [f32; 3],
-    pub hit: u32,
-    pub normal: [f32; 3],
-    pub t: f32,
+/// What the kernel writes per pixel (WGSL `write_pixel`): a hit flag word, then three words
+/// of colour, three of normal and one of depth, each only when that output is asked for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct PixelLayout {
+    pub color: bool,
+    pub normal: bool,
+    pub depth: bool,
+}
+
+impl PixelLayout {
+    pub fn new(options: &RenderOptions) -> PixelLayout {
+        PixelLayout { color: options.color, normal: options.normals, depth: options.depth }
+    }
+
+    /// 32-bit words per pixel (the kernel's `PIXEL_WORDS`).
+    pub fn words(&self) -> u32 {
+        1 + 3 * self.color as u32 + 3 * self.normal as u32 + self.depth as u32
+    }
+
+    /// The frame of `rows` full rows that `words` (one tile, as read back) encode.
+    pub fn decode(&self, options: &RenderOptions, rows: u32, words: &[u32]) -> Frame {
+        let mut frame = Frame::new(&RenderOptions { height: rows, ..*options });
+        let f = |w: &[u32]| [f32::from_bits(w[0]), f32::from_bits(w[1]), f32::from_bits(w[2])];
+        for (k, pixel) in words.chunks_exact(self.words() as usize).enumerate() {
+            frame.hit[k] = pixel[0] != 0;
+            let mut w = 1;
+            if self.color {
+                frame.color[k] = f(&pixel[w..]);
+                w += 3;
+            }
+            if self.normal {
+                frame.normal[k] = f(&pixel[w..]);
+                w += 3;
+            }
+            if self.depth {
+                frame.depth[k] = f32::from_bits(pixel[w]);
+            }
+        }
+        frame
+    }
 }
 
 /// Everything the kernel reads, ready to upload.
@@ -169,7 +202,6 @@ impl SceneBuffers {
             height: rays.height,
             background: f32x3(scene.background.color),
             ambient: f32x3(scene.background.ambient),
-            num_lights: buffers.lights.len() as u32,
             num_spheres: buffers.spheres.len() as u32,
             num_ellipsoids: buffers.ellipsoids.len() as u32,
             num_planes: buffers.planes.len() as u32,

@@ -11,7 +11,7 @@ pub mod buffers;
 use crate::camera::PrimaryRays;
 use crate::render::{Frame, RenderOptions, SphereTest, TriangleTest};
 use crate::scene::Scene;
-use buffers::{PixelOut, SceneBuffers};
+use buffers::{PixelLayout, SceneBuffers};
 use std::collections::HashMap;
 use std::sync::Mutex;
 use wgpu::util::DeviceExt;
@@ -49,7 +49,8 @@ pub struct KernelConfig {
     pub has_planes: bool,
     pub has_triangles: bool,
     pub orthographic: bool,
-    pub want_color: bool,
+    pub pixel_layout: PixelLayout,
+    pub num_lights: u32,
     pub shade_back: bool,
     pub triangle_test: TriangleTest,
     pub sphere_test: SphereTest,
@@ -64,7 +65,8 @@ impl KernelConfig {
             has_planes: !buffers.planes.is_empty(),
             has_triangles: !buffers.triangles.is_empty(),
             orthographic: buffers.orthographic,
-            want_color: options.color,
+            pixel_layout: PixelLayout::new(options),
+            num_lights: buffers.lights.len() as u32,
             shade_back: options.shade_back,
             triangle_test: options.triangle_test,
             sphere_test: options.sphere_test,
@@ -73,7 +75,7 @@ impl KernelConfig {
     }
 
     /// The values for `PipelineCompilationOptions::constants`.
-    pub fn constants(&self) -> [(&'static str, f64); 10] {
+    pub fn constants(&self) -> [(&'static str, f64); 14] {
         let b = |v: bool| if v { 1.0 } else { 0.0 };
         [
             ("HAS_SPHERES", b(self.has_spheres)),
@@ -81,7 +83,11 @@ impl KernelConfig {
             ("HAS_PLANES", b(self.has_planes)),
             ("HAS_TRIANGLES", b(self.has_triangles)),
             ("ORTHOGRAPHIC", b(self.orthographic)),
-            ("WANT_COLOR", b(self.want_color)),
+            ("WANT_COLOR", b(self.pixel_layout.color)),
+            ("WANT_NORMAL", b(self.pixel_layout.normal)),
+            ("WANT_DEPTH", b(self.pixel_layout.depth)),
+            ("PIXEL_WORDS", self.pixel_layout.words() as f64),
+            ("NUM_LIGHTS", self.num_lights as f64),
             ("SHADE_BACK", b(self.shade_back)),
             ("TRIANGLE_TEST", self.triangle_test as u32 as f64),
             ("SPHERE_TEST", self.sphere_test as u32 as f64),
@@ -223,7 +229,8 @@ impl GpuRenderer {
         let buffers = SceneBuffers::new(scene, &rays, self.bvh_min_primitives);
         let pipeline = self.pipeline(KernelConfig::new(&buffers, options));
         let inputs = self.upload(&buffers)?;
-        let tile_rows = self.tile_rows(options.width)?;
+        let layout = PixelLayout::new(options);
+        let tile_rows = self.tile_rows(options.width, &layout)?;
         let mut stats = RenderStats {
             kernel_ns: self.timestamps.then_some(0),
             tiles: 0,
@@ -234,10 +241,10 @@ impl GpuRenderer {
         let mut first_row = 0;
         while first_row < options.height {
             let rows = tile_rows.min(options.height - first_row);
-            let (pixels, kernel_ns) = self.render_tile(&pipeline, &inputs, buffers.params, first_row, rows)?;
+            let (words, kernel_ns) = self.render_tile(&pipeline, &inputs, buffers.params, &layout, first_row, rows)?;
             stats.kernel_ns = stats.kernel_ns.zip(kernel_ns).map(|(a, b)| a + b);
             stats.tiles += 1;
-            on_tile(first_row, tile_frame(options, rows, &pixels))?;
+            on_tile(first_row, layout.decode(options, rows, &words))?;
             first_row += rows;
         }
         Ok(stats)
@@ -265,8 +272,8 @@ impl GpuRenderer {
 
     /// How many image rows one dispatch renders: as many as fit the adapter's storage
     /// binding limit and our own cap, and the dispatch size limit.
-    fn tile_rows(&self, width: u32) -> Result<u32, GpuError> {
-        let row_bytes = width as u64 * std::mem::size_of::<PixelOut>() as u64;
+    fn tile_rows(&self, width: u32, layout: &PixelLayout) -> Result<u32, GpuError> {
+        let row_bytes = width as u64 * layout.words() as u64 * 4;
         let adapter_budget = self.limits.max_storage_buffer_binding_size.min(self.limits.max_buffer_size);
         let max_groups = self.limits.max_compute_workgroups_per_dimension as u64;
         if row_bytes > adapter_budget || (width as u64).div_ceil(WORKGROUP as u64) > max_groups {
@@ -310,9 +317,10 @@ impl GpuRenderer {
         pipeline: &wgpu::ComputePipeline,
         inputs: &SceneInputs,
         mut params: buffers::Params,
+        layout: &PixelLayout,
         first_row: u32,
         rows: u32,
-    ) -> Result<(Vec<PixelOut>, Option<u64>), GpuError> {
+    ) -> Result<(Vec<u32>, Option<u64>), GpuError> {
         params.first_row = first_row;
         params.tile_rows = rows;
         let params_buffer = self.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -320,7 +328,7 @@ impl GpuRenderer {
             contents: bytemuck::bytes_of(&params),
             usage: wgpu::BufferUsages::STORAGE,
         });
-        let size = params.width as u64 * rows as u64 * std::mem::size_of::<PixelOut>() as u64;
+        let size = params.width as u64 * rows as u64 * layout.words() as u64 * 4;
         let output = self.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("pixels"),
             size,
@@ -376,7 +384,7 @@ impl GpuRenderer {
             timer.resolve(&mut encoder);
         }
         self.queue.submit([encoder.finish()]);
-        let pixels: Vec<PixelOut> = bytemuck::pod_collect_to_vec(&read_back(&self.device, &readback)?);
+        let pixels: Vec<u32> = bytemuck::pod_collect_to_vec(&read_back(&self.device, &readback)?);
         let kernel_ns = match &timer {
             Some(timer) => Some(timer.elapsed_ns(&self.device, self.queue.get_timestamp_period())?),
             None => None,
@@ -491,20 +499,4 @@ fn read_back(device: &wgpu::Device, buffer: &wgpu::Buffer) -> Result<Vec<u8>, Gp
     let bytes = slice.get_mapped_range().map_err(|e| GpuError::Readback(e.to_string()))?.to_vec();
     buffer.unmap();
     Ok(bytes)
-}
-
-/// The read-back pixels of one tile as a frame of `rows` full rows.
-fn tile_frame(options: &RenderOptions, rows: u32, pixels: &[PixelOut]) -> Frame {
-    let mut frame = Frame::new(&RenderOptions { height: rows, ..*options });
-    frame.hit = pixels.iter().map(|p| p.hit != 0).collect();
-    if options.color {
-        frame.color = pixels.iter().map(|p| p.color).collect();
-    }
-    if options.normals {
-        frame.normal = pixels.iter().map(|p| p.normal).collect();
-    }
-    if options.depth {
-        frame.depth = pixels.iter().map(|p| p.t).collect();
-    }
-    frame
 }
