@@ -165,7 +165,6 @@ pub struct GpuBvh {
     /// Leaf slot → primitive (the builder's order).
     pub order: Vec<u32>,
     pub build_ms: f64,
-    pub depth: usize,
 }
 
 /// Primitive kinds in a `prim_refs` entry (the kernel's `REF_*` constants).
@@ -232,20 +231,13 @@ impl SceneBuffers {
             refs.push(REF_ELLIPSOID << 30 | k as u32);
         }
         let bvh = Bvh::build(&bounds);
-        let depth = bvh.depth();
         let prim_refs = if self.spheres.is_empty() && self.ellipsoids.is_empty() {
             // Triangles alone: the kernel reads them in leaf order directly (see `leaf_slot`).
             Vec::new()
         } else {
             bvh.order.iter().map(|&p| refs[p as usize]).collect()
         };
-        Some(GpuBvh {
-            nodes: bvh.nodes,
-            prim_refs,
-            order: bvh.order,
-            build_ms: start.elapsed().as_secs_f64() * 1e3,
-            depth,
-        })
+        Some(GpuBvh { nodes: bvh.nodes, prim_refs, order: bvh.order, build_ms: start.elapsed().as_secs_f64() * 1e3 })
     }
 
     /// Walks the tree with `matrix` mapping the current object space to camera-relative world
