@@ -1,8 +1,9 @@
 //! Choosing and calling a renderer: the GPU kernel or the f64 CPU reference.
 
 use crate::cli::BackendChoice;
+use crate::cpu::Reference;
 use crate::gpu::{GpuError, GpuRenderer, RenderStats};
-use crate::render::{Frame, RenderOptions};
+use crate::render::{row_tiles, Frame, RenderOptions};
 use crate::scene::Scene;
 
 /// About how many pixels the CPU reference renders per tile (enough rows to keep both cores
@@ -29,13 +30,6 @@ impl Backend {
         }
     }
 
-    pub fn render(&self, scene: &Scene, options: &RenderOptions) -> Result<Frame, GpuError> {
-        match self {
-            Backend::Gpu(gpu) => gpu.render(scene, options),
-            Backend::Cpu => Ok(crate::cpu::render(scene, options)),
-        }
-    }
-
     /// Renders in tiles of full rows, top first, handing each tile and its first row to
     /// `on_tile`; see [`GpuRenderer::render_tiles`].
     pub fn render_tiles<E: From<GpuError>>(
@@ -47,25 +41,14 @@ impl Backend {
         match self {
             Backend::Gpu(gpu) => gpu.render_tiles(scene, options, on_tile),
             Backend::Cpu => {
-                let rows_per_tile = (CPU_TILE_PIXELS / options.width).max(1);
+                let reference = Reference::new(scene, options);
                 let mut stats = RenderStats::default();
-                let mut first_row = 0;
-                while first_row < options.height {
-                    let rows = rows_per_tile.min(options.height - first_row);
-                    on_tile(first_row, crate::cpu::render_rows(scene, options, first_row, rows))?;
-                    first_row += rows;
+                for (first_row, rows) in row_tiles(options.height, CPU_TILE_PIXELS / options.width) {
+                    on_tile(first_row, reference.rows(first_row, rows))?;
                     stats.tiles += 1;
                 }
                 Ok(stats)
             }
-        }
-    }
-
-    /// A short name for messages: the adapter's name, or "cpu reference".
-    pub fn name(&self) -> String {
-        match self {
-            Backend::Gpu(gpu) => format!("gpu ({})", gpu.adapter_info().name),
-            Backend::Cpu => "cpu reference".to_string(),
         }
     }
 }

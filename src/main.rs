@@ -42,8 +42,8 @@ fn compare(args: &RenderArgs, max_diff_pixels: Option<u64>) -> ExitCode {
         Ok(comparison) => {
             warn(&comparison.warnings);
             println!(
-                "{} against the f64 reference ({} triangles, {} spheres):",
-                Backend::Gpu(gpu).name(),
+                "gpu ({}) against the f64 reference ({} triangles, {} spheres):",
+                gpu.adapter_info().name,
                 args.triangle_test.name(),
                 args.sphere_test.name()
             );

@@ -65,7 +65,8 @@ pub struct OutputErrors {
     pub float_mean: f64,
     /// Depth only: the largest |Δt| / |t_reference|.
     pub relative_max: Option<f64>,
-    /// NaN or infinite values in the tested frame's buffer for this output.
+    /// NaN or infinite values in the tested frame's buffer for this output (channels for
+    /// colour, pixels the tested frame hits for normals and depth).
     pub non_finite: usize,
 }
 
@@ -109,15 +110,12 @@ fn color_errors(test: &Frame, reference: &Frame, hit_mismatches: usize) -> Outpu
 
 fn normal_errors(test: &Frame, reference: &Frame, hit_mismatches: usize) -> OutputErrors {
     let mut stats = Stats::default();
-    let mut non_finite = 0;
     for k in both_hit(test, reference) {
         let (a, b) = (glam::Vec3::from(test.normal[k]).as_dvec3(), glam::Vec3::from(reference.normal[k]).as_dvec3());
-        if !a.is_finite() {
-            non_finite += 1;
-            continue;
+        if a.is_finite() {
+            // atan2(|a×b|, a·b) keeps its precision for tiny angles, where acos does not.
+            stats.add(a.cross(b).length().atan2(a.dot(b)));
         }
-        // atan2(|a×b|, a·b) keeps its precision for tiny angles, where acos does not.
-        stats.add(a.cross(b).length().atan2(a.dot(b)));
     }
     OutputErrors {
         output: Output::Normals,
@@ -126,18 +124,16 @@ fn normal_errors(test: &Frame, reference: &Frame, hit_mismatches: usize) -> Outp
         float_max: stats.max,
         float_mean: stats.mean(),
         relative_max: None,
-        non_finite,
+        non_finite: hits_where(test, |k| test.normal[k].iter().any(|v| !v.is_finite())),
     }
 }
 
 fn depth_errors(test: &Frame, reference: &Frame, hit_mismatches: usize, (min, max): (f32, f32)) -> OutputErrors {
     let mut stats = Stats::default();
     let mut relative_max: f64 = 0.0;
-    let mut non_finite = 0;
     for k in both_hit(test, reference) {
         let (a, b) = (test.depth[k] as f64, reference.depth[k] as f64);
         if !a.is_finite() {
-            non_finite += 1;
             continue;
         }
         stats.add((a - b).abs());
@@ -152,8 +148,14 @@ fn depth_errors(test: &Frame, reference: &Frame, hit_mismatches: usize, (min, ma
         float_max: stats.max,
         float_mean: stats.mean(),
         relative_max: Some(relative_max),
-        non_finite,
+        non_finite: hits_where(test, |k| !test.depth[k].is_finite()),
     }
+}
+
+/// How many pixels `frame` hits for which `bad` holds: NaN or infinity are counted wherever
+/// the tested frame has a hit, whether or not the reference has one there.
+fn hits_where(frame: &Frame, bad: impl Fn(usize) -> bool) -> usize {
+    (0..frame.hit.len()).filter(|&k| frame.hit[k] && bad(k)).count()
 }
 
 fn both_hit<'a>(a: &'a Frame, b: &'a Frame) -> impl Iterator<Item = usize> + 'a {

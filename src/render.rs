@@ -121,6 +121,13 @@ impl Frame {
     }
 }
 
+/// Splits `height` image rows into tiles of at most `rows_per_tile` (≥ 1) rows, top first:
+/// `(first_row, rows)` for each.
+pub fn row_tiles(height: u32, rows_per_tile: u32) -> impl Iterator<Item = (u32, u32)> {
+    let step = rows_per_tile.max(1);
+    (0..height).step_by(step as usize).map(move |first| (first, step.min(height - first)))
+}
+
 impl Frame {
     /// Copies `tile` (full-width rows) into this frame starting at image row `first_row`.
     pub fn paste(&mut self, first_row: u32, tile: &Frame) {

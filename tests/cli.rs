@@ -215,7 +215,7 @@ fn gpu_and_cpu_binaries_agree() {
             raycaster::image_io::read_image(&out).unwrap()
         })
         .collect();
-    let diff = common::pixel_diff(&images[0], &images[1]);
+    let diff = raycaster::metrics::image_diff(&images[0], &images[1]);
     assert!(diff.off_by_more_than_one <= 2, "{diff:?}");
 }
 

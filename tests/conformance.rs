@@ -5,7 +5,8 @@
 
 mod common;
 
-use common::{corpus, pixel_diff};
+use common::corpus;
+use raycaster::metrics::image_diff;
 use std::path::Path;
 use std::process::Command;
 
@@ -63,7 +64,7 @@ fn conformance(backend: &str) {
             let ours = raycaster::image_io::read_image(&dir.path().join(&output)).unwrap();
             let stem = output.trim_end_matches(".tga");
             let expected = raycaster::image_io::read_image(&corpus().join(format!("a2/expected/{stem}.png"))).unwrap();
-            let diff = pixel_diff(&ours, &expected);
+            let diff = image_diff(&ours, &expected);
             println!("  {stem:<22} {:>5}   (max diff {})", diff.off_by_more_than_one, diff.max);
             if diff.off_by_more_than_one as f64 > MAX_OFF_FRACTION * diff.pixels as f64 {
                 failures.push(format!("{stem}: {} pixels off", diff.off_by_more_than_one));

@@ -92,14 +92,6 @@ fn options(size: u32, (triangle_test, sphere_test): (TriangleTest, SphereTest)) 
     RenderOptions { triangle_test, sphere_test, ..RenderOptions::all(size, size) }
 }
 
-fn non_finite(frame: &Frame) -> usize {
-    let colour = frame.color.iter().flatten().filter(|v| !v.is_finite()).count();
-    let hits = (0..frame.hit.len()).filter(|&k| frame.hit[k]);
-    let geometry =
-        hits.filter(|&k| !frame.depth[k].is_finite() || frame.normal[k].iter().any(|v| !v.is_finite())).count();
-    colour + geometry
-}
-
 /// Pixels off by more than one level in the worst output, and NaN/inf counts.
 fn disagreement(ours: &Frame, reference: &Frame, our_depth: (f32, f32), reference_depth: (f32, f32)) -> usize {
     use raycaster::image_io::{color_image, depth_image, normals_image};
@@ -117,7 +109,8 @@ fn disagreement(ours: &Frame, reference: &Frame, our_depth: (f32, f32), referenc
 /// (failing pixels, passes) of one case for one GPU frame.
 fn judge(case: &Case, ours: &Frame, reference: &Frame, other: Option<&Frame>) -> (usize, bool) {
     let allowed = ours.hit.len() / 1000;
-    let nan = non_finite(ours);
+    let errors = compare_frames(ours, reference, case.depth);
+    let nan: usize = errors.iter().map(|e| e.non_finite).sum();
     match case.criterion {
         Criterion::NoCracks => {
             let cracks = (0..ours.hit.len()).filter(|&k| reference.hit[k] && !ours.hit[k]).count();
@@ -136,7 +129,6 @@ fn judge(case: &Case, ours: &Frame, reference: &Frame, other: Option<&Frame>) ->
             (off + nan, off <= allowed && nan == 0)
         }
         Criterion::NormalsAgree => {
-            let errors = compare_frames(ours, reference, case.depth);
             let normals = errors.iter().find(|e| e.output == Output::Normals).unwrap();
             let off = normals.image.off_by_more_than_one;
             (off + normals.non_finite, off <= allowed && normals.non_finite == 0)

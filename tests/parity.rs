@@ -4,8 +4,8 @@
 
 mod common;
 
-use common::{corpus, pixel_diff, scenes_dir, PixelDiff};
-use raycaster::image_io::{color_image, depth_image, normals_image};
+use common::{corpus, scenes_dir};
+use raycaster::metrics::compare_frames;
 use raycaster::render::RenderOptions;
 use raycaster::scene::load_scene;
 use std::path::{Path, PathBuf};
@@ -49,11 +49,8 @@ fn parity(files: &[PathBuf]) {
             let reference = raycaster::cpu::render(&scene, &options);
             let ours = gpu.render(&scene, &options).unwrap();
             let (min, max) = raycaster::metrics::depth_range_of(&reference);
-            let diffs: [PixelDiff; 3] = [
-                pixel_diff(&color_image(&ours), &color_image(&reference)),
-                pixel_diff(&normals_image(&ours), &normals_image(&reference)),
-                pixel_diff(&depth_image(&ours, min, max), &depth_image(&reference, min, max)),
-            ];
+            // Colour, normals and depth, in that order.
+            let diffs: Vec<_> = compare_frames(&ours, &reference, (min, max)).iter().map(|e| e.image).collect();
             let name = format!("{} ({shade_back})", path.file_name().unwrap().to_string_lossy());
             let cells: Vec<String> =
                 diffs.iter().map(|d| format!("{:>9} {:>7}", d.off_by_more_than_one, d.max)).collect();

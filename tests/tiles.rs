@@ -94,3 +94,12 @@ fn every_output_combination_decodes_the_same() {
         assert_eq!(frame.depth, if options.depth { all.depth.clone() } else { vec![] }, "outputs {mask:03b}");
     }
 }
+
+/// Tiles cover every row once, top first, the last one shorter; a tile size of 0 means 1.
+#[test]
+fn row_tiles_cover_the_image() {
+    use raycaster::render::row_tiles;
+    assert_eq!(row_tiles(10, 4).collect::<Vec<_>>(), vec![(0, 4), (4, 4), (8, 2)]);
+    assert_eq!(row_tiles(3, 0).collect::<Vec<_>>(), vec![(0, 1), (1, 1), (2, 1)]);
+    assert_eq!(row_tiles(0, 5).count(), 0);
+}

@@ -24,12 +24,7 @@ pub fn render(scene: &Scene, options: &RenderOptions) -> Frame {
 /// Renders image rows `first_row .. first_row + rows` (counted from the top) as a frame of
 /// that many full-width rows.
 pub fn render_rows(scene: &Scene, options: &RenderOptions, first_row: u32, rows: u32) -> Frame {
-    let pixels: Vec<(u32, u32)> =
-        (first_row..first_row + rows).flat_map(|row| (0..options.width).map(move |i| (i, row))).collect();
-    let mut frame = Reference::new(scene, options).pixels(&pixels);
-    frame.width = options.width;
-    frame.height = rows;
-    frame
+    Reference::new(scene, options).rows(first_row, rows)
 }
 
 /// The reference prepared for one scene and image size, able to render any set of pixels
@@ -45,6 +40,17 @@ impl<'a> Reference<'a> {
         let rays = PrimaryRays::new(&scene.camera, options.width, options.height)
             .expect("the parser rejects cameras whose up is parallel to their direction");
         Reference { tracer: Tracer::new(scene), rays, options: *options }
+    }
+
+    /// Image rows `first_row .. first_row + rows` (from the top) as a frame of full rows.
+    pub fn rows(&self, first_row: u32, rows: u32) -> Frame {
+        let width = self.options.width;
+        let pixels: Vec<(u32, u32)> =
+            (first_row..first_row + rows).flat_map(|row| (0..width).map(move |i| (i, row))).collect();
+        let mut frame = self.pixels(&pixels);
+        frame.width = width;
+        frame.height = rows;
+        frame
     }
 
     /// The listed pixels (column from the left, row from the top) as a one-row frame, in

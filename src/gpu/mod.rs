@@ -9,7 +9,7 @@
 pub mod buffers;
 
 use crate::camera::PrimaryRays;
-use crate::render::{Frame, RenderOptions, SphereTest, TriangleTest};
+use crate::render::{row_tiles, Frame, RenderOptions, SphereTest, TriangleTest};
 use crate::scene::Scene;
 use buffers::{PixelLayout, SceneBuffers};
 use std::collections::HashMap;
@@ -238,14 +238,11 @@ impl GpuRenderer {
             prepare_ms: start.elapsed().as_secs_f64() * 1e3,
             scene_bytes: inputs.bytes(),
         };
-        let mut first_row = 0;
-        while first_row < options.height {
-            let rows = tile_rows.min(options.height - first_row);
+        for (first_row, rows) in row_tiles(options.height, tile_rows) {
             let (words, kernel_ns) = self.render_tile(&pipeline, &inputs, buffers.params, &layout, first_row, rows)?;
             stats.kernel_ns = stats.kernel_ns.zip(kernel_ns).map(|(a, b)| a + b);
             stats.tiles += 1;
             on_tile(first_row, layout.decode(options, rows, &words))?;
-            first_row += rows;
         }
         Ok(stats)
     }

@@ -32,6 +32,3 @@ pub fn gpu() -> Option<&'static GpuRenderer> {
         Err(e) => panic!("GPU test without a GPU adapter: {e}\nInstall lavapipe (apt-get install mesa-vulkan-drivers), or set RAYCASTER_SKIP_GPU=1 to skip on purpose."),
     }
 }
-
-#[allow(unused_imports)]
-pub use raycaster::metrics::{image_diff as pixel_diff, ImageDiff as PixelDiff};
