@@ -4,7 +4,7 @@
 //! Data flows one way: scene text → [`scene`] (parsed model) → [`gpu`] (flattened buffers and
 //! the WGSL kernel) or [`cpu`] (the reference, which walks the model itself) →
 //! [`render::Frame`] (float buffers) → [`image_io`] (8-bit images, TGA or PNG).
-//! [`cli`] and [`job`] are the command line's layer over that.
+//! The command line (`src/main.rs`, `src/app/`) is a thin layer over this library.
 //!
 //! ```no_run
 //! use raycaster::{gpu::GpuRenderer, image_io, metrics, render::RenderOptions, scene};
@@ -24,15 +24,11 @@
 //! # }
 //! ```
 
-pub mod backend;
-pub mod bench;
 pub mod bvh;
 pub mod camera;
-pub mod cli;
 pub mod cpu;
 pub mod gpu;
 pub mod image_io;
-pub mod job;
 pub mod metrics;
 pub mod render;
 pub mod scene;

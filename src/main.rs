@@ -1,7 +1,9 @@
 //! The `raycaster` command: parses the command line and hands it to the library.
 
-use raycaster::backend::Backend;
-use raycaster::cli::{self, BackendChoice, Command, RenderArgs};
+mod app;
+
+use app::backend::Backend;
+use app::cli::{self, BackendChoice, Command, RenderArgs};
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
@@ -24,7 +26,7 @@ fn main() -> ExitCode {
 
 fn render(args: &RenderArgs) -> ExitCode {
     let Some(backend) = open_backend(args.backend) else { return ExitCode::FAILURE };
-    match raycaster::job::run(args, &backend) {
+    match app::job::run(args, &backend) {
         Ok(warnings) => {
             warn(&warnings);
             ExitCode::SUCCESS
@@ -38,7 +40,7 @@ fn render(args: &RenderArgs) -> ExitCode {
 
 fn compare(args: &RenderArgs, max_diff_pixels: Option<u64>) -> ExitCode {
     let Some(Backend::Gpu(gpu)) = open_backend(BackendChoice::Gpu) else { return ExitCode::FAILURE };
-    match raycaster::job::compare(args, &gpu) {
+    match app::job::compare(args, &gpu) {
         Ok(comparison) => {
             warn(&comparison.warnings);
             println!(
@@ -71,7 +73,7 @@ fn batch(file: &std::path::Path, choice: BackendChoice) -> ExitCode {
         }
     };
     let Some(backend) = open_backend(choice) else { return ExitCode::FAILURE };
-    let (warnings, failures) = raycaster::job::run_batch(&text, &backend);
+    let (warnings, failures) = app::job::run_batch(&text, &backend);
     warn(&warnings);
     for f in &failures {
         eprintln!("raycaster: {}:{}: {}", file.display(), f.line, f.message);
@@ -84,7 +86,7 @@ fn batch(file: &std::path::Path, choice: BackendChoice) -> ExitCode {
 }
 
 fn bench(args: &cli::BenchArgs) -> ExitCode {
-    use raycaster::bench;
+    use app::bench;
     let Some(Backend::Gpu(gpu)) = open_backend(BackendChoice::Gpu) else { return ExitCode::FAILURE };
     let cases = match bench::standard_cases(&args.corpus, args.quick) {
         Ok(cases) => cases
@@ -111,10 +113,14 @@ fn bench(args: &cli::BenchArgs) -> ExitCode {
     let written = std::fs::create_dir_all(&args.out)
         .map_err(|e| format!("{}: {e}", args.out.display()))
         .and_then(|()| std::fs::write(args.out.join("bench.csv"), bench::csv(&rows)).map_err(|e| e.to_string()))
-        .and_then(|()| bench::plot(&rows, &args.out.join("bench.png")).map_err(|e| e.to_string()));
+        .and_then(|()| write_plot(&rows, &args.out));
     match written {
         Ok(()) => {
-            eprintln!("bench: wrote {0}/bench.csv and {0}/bench.png", args.out.display());
+            eprintln!(
+                "bench: wrote {}/bench.csv{}",
+                args.out.display(),
+                if cfg!(feature = "plot") { " and bench.png" } else { "" }
+            );
             ExitCode::SUCCESS
         }
         Err(e) => {
@@ -122,6 +128,17 @@ fn bench(args: &cli::BenchArgs) -> ExitCode {
             ExitCode::FAILURE
         }
     }
+}
+
+#[cfg(feature = "plot")]
+fn write_plot(rows: &[app::bench::Row], out: &std::path::Path) -> Result<(), String> {
+    app::bench::plot(rows, &out.join("bench.png")).map_err(|e| e.to_string())
+}
+
+/// Built without the `plot` feature: the table and the CSV only.
+#[cfg(not(feature = "plot"))]
+fn write_plot(_: &[app::bench::Row], _: &std::path::Path) -> Result<(), String> {
+    Ok(())
 }
 
 fn open_backend(choice: BackendChoice) -> Option<Backend> {

@@ -2,8 +2,8 @@
 //! `-shade_back`) and double-dash ones (`--input`, `--shade-back`) are the same flags, in any
 //! order. Errors are one line naming the flag; the binary exits with status 2 on them.
 
-use crate::image_io::ImageFormat;
-use crate::render::{SphereTest, TriangleTest};
+use raycaster::image_io::ImageFormat;
+use raycaster::render::{SphereTest, TriangleTest};
 use std::ffi::OsString;
 use std::fmt;
 use std::path::PathBuf;

@@ -1,10 +1,10 @@
 //! Choosing and calling a renderer: the GPU kernel or the f64 CPU reference.
 
-use crate::cli::BackendChoice;
-use crate::cpu::Reference;
-use crate::gpu::{GpuError, GpuRenderer, RenderStats};
-use crate::render::{row_tiles, Frame, RenderOptions};
-use crate::scene::Scene;
+use crate::app::cli::BackendChoice;
+use raycaster::cpu::Reference;
+use raycaster::gpu::{GpuError, GpuRenderer, RenderStats};
+use raycaster::render::{row_tiles, Frame, RenderOptions};
+use raycaster::scene::Scene;
 
 /// About how many pixels the CPU reference renders per tile (enough rows to keep both cores
 /// busy, few enough to bound memory).

@@ -1,11 +1,11 @@
 //! One command line's work: read the scene, render, write the requested images.
 
-use crate::backend::Backend;
-use crate::cli::RenderArgs;
-use crate::gpu::GpuError;
-use crate::image_io::{self, ImageError, ImageFile};
-use crate::render::RenderOptions;
-use crate::scene::{self, Scene, SceneError};
+use crate::app::backend::Backend;
+use crate::app::cli::RenderArgs;
+use raycaster::gpu::GpuError;
+use raycaster::image_io::{self, ImageError, ImageFile};
+use raycaster::render::RenderOptions;
+use raycaster::scene::{self, Scene, SceneError};
 
 /// Anything that can stop a render.
 #[derive(Debug, thiserror::Error)]
@@ -80,7 +80,7 @@ enum Kind {
 /// What `raycaster compare` found: the GPU against the reference, per output.
 #[derive(Clone, Debug)]
 pub struct Comparison {
-    pub errors: Vec<crate::metrics::OutputErrors>,
+    pub errors: Vec<raycaster::metrics::OutputErrors>,
     pub warnings: Vec<String>,
 }
 
@@ -95,16 +95,19 @@ impl Comparison {
 }
 
 /// Renders what `args` names with the GPU and with the f64 reference, writing no file.
-pub fn compare(args: &RenderArgs, gpu: &crate::gpu::GpuRenderer) -> Result<Comparison, Error> {
+pub fn compare(args: &RenderArgs, gpu: &raycaster::gpu::GpuRenderer) -> Result<Comparison, Error> {
     let scene = scene::load_scene(&args.input)?;
     let options = options_for(args);
     let ours = gpu.render(&scene, &options)?;
-    let reference = crate::cpu::render(&scene, &options);
+    let reference = raycaster::cpu::render(&scene, &options);
     let depth_range = match &args.depth {
         Some(d) => (d.min, d.max),
-        None => crate::metrics::depth_range_of(&reference),
+        None => raycaster::metrics::depth_range_of(&reference),
     };
-    Ok(Comparison { errors: crate::metrics::compare_frames(&ours, &reference, depth_range), warnings: scene.warnings })
+    Ok(Comparison {
+        errors: raycaster::metrics::compare_frames(&ours, &reference, depth_range),
+        warnings: scene.warnings,
+    })
 }
 
 /// One failed line of a batch.
@@ -127,8 +130,8 @@ pub fn run_batch(text: &str, backend: &Backend) -> (Vec<String>, Vec<BatchFailur
             continue;
         }
         let fail = |message: String| BatchFailure { line: line_number, message };
-        match crate::cli::parse_args(&words) {
-            Ok(crate::cli::Command::Render(args)) => match run(&args, backend) {
+        match crate::app::cli::parse_args(&words) {
+            Ok(crate::app::cli::Command::Render(args)) => match run(&args, backend) {
                 Ok(w) => warnings.extend(w),
                 Err(e) => failures.push(fail(e.to_string())),
             },

@@ -7,12 +7,12 @@
 //! too slow. The result is printed as Markdown, saved as CSV and drawn as a speed-against-error
 //! plot.
 
-use crate::cpu::Reference;
-use crate::gpu::{GpuError, GpuRenderer};
-use crate::metrics::{compare_frames, depth_range_of, Output, OutputErrors};
-use crate::render::{Frame, RenderOptions, TriangleTest};
-use crate::scene::{self, Background, Camera, DirectionalLight, Material, Mesh, Object, Projection, Scene, Shape};
 use glam::DVec3;
+use raycaster::cpu::Reference;
+use raycaster::gpu::{GpuError, GpuRenderer};
+use raycaster::metrics::{compare_frames, depth_range_of, Output, OutputErrors};
+use raycaster::render::{Frame, RenderOptions, TriangleTest};
+use raycaster::scene::{self, Background, Camera, DirectionalLight, Material, Mesh, Object, Projection, Scene, Shape};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -64,6 +64,7 @@ impl Row {
 
     /// The scene's name, with the image size and the triangle test where they are not the
     /// course's 200² and the default.
+    #[cfg(feature = "plot")]
     pub fn label(&self) -> String {
         let mut label = self.name.clone();
         if (self.width, self.height) != (200, 200) {
@@ -388,10 +389,11 @@ pub fn csv(rows: &[Row]) -> String {
 /// Draws Mrays/s (log) against the largest relative depth error (log) of each row as a PNG.
 /// The depth error is the finest error measure the reference gives (f32 rounding shows in it
 /// even where no pixel changes level); rows with a pixel off by more than one level are red.
-pub fn plot(rows: &[Row], path: &Path) -> Result<(), crate::image_io::ImageError> {
+#[cfg(feature = "plot")]
+pub fn plot(rows: &[Row], path: &Path) -> Result<(), raycaster::image_io::ImageError> {
     use plotters::prelude::*;
     const SIZE: (u32, u32) = (900, 600);
-    let fail = |e: String| crate::image_io::ImageError { path: path.to_path_buf(), message: e };
+    let fail = |e: String| raycaster::image_io::ImageError { path: path.to_path_buf(), message: e };
     let mut buffer = vec![255u8; (SIZE.0 * SIZE.1 * 3) as usize];
     {
         let points: Vec<(f64, f64, bool, String)> = rows
@@ -429,10 +431,11 @@ pub fn plot(rows: &[Row], path: &Path) -> Result<(), crate::image_io::ImageError
         root.present().map_err(|e| fail(e.to_string()))?;
     }
     let image = image::RgbImage::from_raw(SIZE.0, SIZE.1, buffer).expect("sized buffer");
-    crate::image_io::write_image(path, &image)
+    raycaster::image_io::write_image(path, &image)
 }
 
 /// A log-scale axis range around the values, a factor of 2 beyond each end.
+#[cfg(feature = "plot")]
 fn bounds_log(values: impl Iterator<Item = f64>) -> (f64, f64) {
     let (lo, hi) = values.fold((f64::MAX, f64::MIN), |(lo, hi), v| (lo.min(v), hi.max(v)));
     if lo > hi {
