@@ -16,9 +16,11 @@ override ORTHOGRAPHIC: bool = false;
 override WANT_COLOR: bool = true;
 override WANT_NORMAL: bool = true;
 override WANT_DEPTH: bool = true;
-// Words each pixel takes in `pixels`: the hit flag, then 3 for colour, 3 for the normal and
-// 1 for the depth, each only when asked for (the host's gpu::PixelLayout).
+// Words each pixel takes in `pixels` (the host's gpu::layout::PixelLayout). As floats: the
+// hit flag, then 3 for colour, 3 for the normal and 1 for the depth, each only when asked
+// for. Packed (PACKED_8BIT, for 8-bit images): one word per output asked for.
 override PIXEL_WORDS: u32 = 8u;
+override PACKED_8BIT: bool = false;
 // A loop bound fixed at compile time: no light code for a scene without lights, and the
 // loop unrolled for the rest.
 override NUM_LIGHTS: u32 = 0u;
@@ -28,8 +30,10 @@ override SHADE_BACK: bool = false;
 // spheres 0 = the textbook quadratic, 1 = the precise form of Ray Tracing Gems ch. 7.
 override TRIANGLE_TEST: u32 = 2u;
 override SPHERE_TEST: u32 = 1u;
-// Finite primitives through the bounding volume hierarchy (else flat loops over each kind).
+// Finite primitives through the bounding volume hierarchy, or through screen-space bins
+// (gpu::binning); else flat loops over each kind.
 override USE_BVH: bool = false;
+override USE_BINS: bool = false;
 
 const F32_MAX: f32 = 3.40282347e38;
 // The "no hit" distance: never less than any closest-so-far.
@@ -54,7 +58,8 @@ struct Params {
     background: vec3<f32>,
     tile_rows: u32,
     ambient: vec3<f32>,
-    _pad0: u32,
+    // Bins per image row (USE_BINS).
+    bin_columns: u32,
     num_spheres: u32,
     num_ellipsoids: u32,
     num_planes: u32,
@@ -103,6 +108,23 @@ struct Triangle {
     _pad1: u32,
 }
 
+// A triangle for primary rays (gpu::binning::EyeTriangle): three edge planes n · q − w, with
+// q the ray's direction (perspective, all rays from the eye at the origin) or its origin
+// (orthographic, all rays along one direction), and the triangle's plane n · p = w.
+struct EyeTriangle {
+    e0: vec4<f32>,
+    e1: vec4<f32>,
+    e2: vec4<f32>,
+    plane: vec4<f32>,
+}
+
+// A primitive listed in a bin (kind << 30 | index, as prim_refs) and a lower bound of the t
+// at which a primary ray can meet it; a bin's items are sorted by it.
+struct BinItem {
+    reference: u32,
+    near: f32,
+}
+
 struct Light {
     // −normalise(direction): from the surface toward the light.
     to_light: vec3<f32>,
@@ -133,6 +155,10 @@ struct BvhNode {
 @group(0) @binding(8) var<storage, read> nodes: array<BvhNode>;
 // kind << 30 | index into that kind's array.
 @group(0) @binding(9) var<storage, read> prim_refs: array<u32>;
+@group(0) @binding(10) var<storage, read> eye_triangles: array<EyeTriangle>;
+// Per bin (8×8 pixels, row by row from the top): first item and count.
+@group(0) @binding(11) var<storage, read> bin_ranges: array<vec2<u32>>;
+@group(0) @binding(12) var<storage, read> bin_items: array<BinItem>;
 
 const REF_TRIANGLE: u32 = 0u;
 const REF_SPHERE: u32 = 1u;
@@ -373,7 +399,7 @@ struct Closest {
     index: u32,
 }
 
-fn closest_hit(ray: Ray) -> Closest {
+fn closest_hit(ray: Ray, bin: u32) -> Closest {
     let tmin = t_min();
     var best = Closest(NO_HIT, KIND_NONE, 0u);
     // Planes first: infinite, outside the hierarchy, and a near plane hit prunes it.
@@ -387,6 +413,9 @@ fn closest_hit(ray: Ray) -> Closest {
     }
     // Only the watertight test reads the shear; otherwise the compiler drops it.
     let shear = shear_for(ray.direction);
+    if (USE_BINS) {
+        return walk_bin(bin, ray, tmin, best);
+    }
     if (USE_BVH) {
         return traverse(ray, shear, tmin, best);
     }
@@ -531,6 +560,73 @@ fn traverse(ray: Ray, shear: Shear, tmin: f32, start: Closest) -> Closest {
     return best;
 }
 
+// The edge functions of a primary ray against a triangle's edge planes: all of one sign
+// (or zero) when the ray's line meets the triangle, edges included. Watertight (see
+// gpu::binning::EyeTriangle): a shared edge's plane is negated bit for bit in its two
+// triangles. Then t from the triangle's plane; a ray in that plane never hits. The
+// non-short-circuit & and | keep it free of branches.
+fn eye_triangle_t(tri: EyeTriangle, ray: Ray, tmin: f32) -> f32 {
+    var q = ray.direction;
+    if (ORTHOGRAPHIC) {
+        q = ray.origin;
+    }
+    let e0 = dot(tri.e0.xyz, q) - tri.e0.w;
+    let e1 = dot(tri.e1.xyz, q) - tri.e1.w;
+    let e2 = dot(tri.e2.xyz, q) - tri.e2.w;
+    let inside = ((e0 >= 0.0) & (e1 >= 0.0) & (e2 >= 0.0)) | ((e0 <= 0.0) & (e1 <= 0.0) & (e2 <= 0.0));
+    let denominator = dot(tri.plane.xyz, ray.direction);
+    var numerator = tri.plane.w;
+    if (ORTHOGRAPHIC) {
+        numerator -= dot(tri.plane.xyz, ray.origin);
+    }
+    let t = numerator / select(1.0, denominator, denominator != 0.0);
+    return select(NO_HIT, t_if_above(t, tmin), inside & (denominator != 0.0));
+}
+
+fn try_eye_triangle(k: u32, ray: Ray, tmin: f32, best: Closest) -> Closest {
+    let t = eye_triangle_t(eye_triangles[k], ray, tmin);
+    if (t < best.t) {
+        return Closest(t, KIND_TRIANGLE, k);
+    }
+    return best;
+}
+
+fn try_binned(r: u32, ray: Ray, tmin: f32, best: Closest) -> Closest {
+    // Triangles alone: the reference is the index (REF_TRIANGLE is 0).
+    if (!HAS_SPHERES && !HAS_ELLIPSOIDS) {
+        return try_eye_triangle(r, ray, tmin, best);
+    }
+    let kind = r >> 30u;
+    let index = r & REF_INDEX_MASK;
+    var out = best;
+    if (HAS_TRIANGLES && kind == REF_TRIANGLE) {
+        out = try_eye_triangle(index, ray, tmin, out);
+    }
+    if (HAS_SPHERES && kind == REF_SPHERE) {
+        out = try_sphere(index, ray, tmin, out);
+    }
+    if (HAS_ELLIPSOIDS && kind == REF_ELLIPSOID) {
+        out = try_ellipsoid(index, ray, tmin, out);
+    }
+    return out;
+}
+
+// The closest hit among the primitives listed in this pixel's bin, nearest first: a ray
+// stops once its closest hit is nearer than the next item can be. The list, and so the
+// loop, is the same for every invocation of the workgroup.
+fn walk_bin(bin: u32, ray: Ray, tmin: f32, start: Closest) -> Closest {
+    var best = start;
+    let range = bin_ranges[bin];
+    for (var k = range.x; k < range.x + range.y; k++) {
+        let item = bin_items[k];
+        if (item.near > best.t) {
+            break;
+        }
+        best = try_binned(item.reference, ray, tmin, best);
+    }
+    return best;
+}
+
 struct Surface {
     normal: vec3<f32>,
     material: u32,
@@ -576,8 +672,36 @@ fn shade(surface: Surface, ray: Ray) -> vec3<f32> {
     return color;
 }
 
+// docs/SPEC.md §5: floor(255·clamp(v, 0, 1)) per channel, as image_io::quantize (NaN → 0),
+// packed r | g << 8 | b << 16.
+fn pack_rgb8(c: vec3<f32>) -> u32 {
+    let q = vec3<u32>(floor(255.0 * clamp(select(c, vec3<f32>(0.0), c != c), vec3<f32>(0.0), vec3<f32>(1.0))));
+    return q.x | (q.y << 8u) | (q.z << 16u);
+}
+
+// The 8-bit images, one word each: colour, |N| (black on a miss), and t as bits for the
+// host to quantise in f64 (all ones on a miss).
+fn write_packed_pixel(index: u32, hit: bool, color: vec3<f32>, normal: vec3<f32>, t: f32) {
+    var w = index * PIXEL_WORDS;
+    if (WANT_COLOR) {
+        pixels[w] = pack_rgb8(color);
+        w += 1u;
+    }
+    if (WANT_NORMAL) {
+        pixels[w] = select(0u, pack_rgb8(abs(normal)), hit);
+        w += 1u;
+    }
+    if (WANT_DEPTH) {
+        pixels[w] = select(0xffffffffu, bitcast<u32>(t), hit);
+    }
+}
+
 // Writes one pixel: the hit flag, then only the outputs asked for.
 fn write_pixel(index: u32, hit: bool, color: vec3<f32>, normal: vec3<f32>, t: f32) {
+    if (PACKED_8BIT) {
+        write_packed_pixel(index, hit, color, normal, t);
+        return;
+    }
     var w = index * PIXEL_WORDS;
     pixels[w] = select(0u, 1u, hit);
     w += 1u;
@@ -608,7 +732,8 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     // Image rows count from the top, the camera's j from the bottom.
     let j = params.height - 1u - (params.first_row + row);
     let ray = primary_ray(i, j);
-    let hit = closest_hit(ray);
+    let image_row = params.first_row + row;
+    let hit = closest_hit(ray, (image_row / 8u) * params.bin_columns + i / 8u);
     let index = row * params.width + i;
     if (hit.kind == KIND_NONE) {
         write_pixel(index, false, params.background, vec3<f32>(0.0), 0.0);

@@ -3,7 +3,7 @@
 //! twin, so a field added on one side only cannot silently shift the others.
 
 use raycaster::bvh::BvhNode;
-use raycaster::gpu::buffers::{GpuEllipsoid, GpuLight, GpuPlane, GpuSphere, GpuTriangle, Params};
+use raycaster::gpu::layout::{GpuEllipsoid, GpuLight, GpuPlane, GpuSphere, GpuTriangle, Params};
 use raycaster::gpu::SHADER_SOURCE;
 use std::mem::{offset_of, size_of};
 
@@ -182,9 +182,9 @@ fn bvh_constants_match_the_builder() {
         other => panic!("{other:?}"),
     }
     let refs = [
-        ("REF_TRIANGLE", raycaster::gpu::buffers::REF_TRIANGLE),
-        ("REF_SPHERE", raycaster::gpu::buffers::REF_SPHERE),
-        ("REF_ELLIPSOID", raycaster::gpu::buffers::REF_ELLIPSOID),
+        ("REF_TRIANGLE", raycaster::gpu::layout::REF_TRIANGLE),
+        ("REF_SPHERE", raycaster::gpu::layout::REF_SPHERE),
+        ("REF_ELLIPSOID", raycaster::gpu::layout::REF_ELLIPSOID),
     ];
     for (name, value) in refs {
         assert_eq!(shader_constant(&m, name), naga::Literal::U32(value), "{name}");

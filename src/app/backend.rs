@@ -3,6 +3,7 @@
 use crate::app::cli::BackendChoice;
 use raycaster::cpu::Reference;
 use raycaster::gpu::{GpuError, GpuRenderer, RenderStats};
+use raycaster::image_io;
 use raycaster::render::{row_tiles, Frame, RenderOptions};
 use raycaster::scene::Scene;
 
@@ -51,4 +52,42 @@ impl Backend {
             }
         }
     }
+
+    /// Renders the 8-bit images `options` asks for (the depth visualisation over
+    /// `depth_range`), in tiles of full rows, top first. On the GPU the kernel quantises,
+    /// so only the bytes of the images cross from the device.
+    pub fn render_images<E: From<GpuError>>(
+        &self,
+        scene: &Scene,
+        options: &RenderOptions,
+        depth_range: (f32, f32),
+        mut on_tile: impl FnMut(u32, ImageRows) -> Result<(), E>,
+    ) -> Result<RenderStats, E> {
+        let (min, max) = depth_range;
+        match self {
+            Backend::Gpu(gpu) => gpu.prepare(scene, options, true)?.render(|tile| {
+                let rows = ImageRows {
+                    color: options.color.then(|| tile.color_rgb()),
+                    normals: options.normals.then(|| tile.normals_rgb()),
+                    depth: options.depth.then(|| tile.depth_rgb(min, max)),
+                };
+                on_tile(tile.first_row, rows)
+            }),
+            Backend::Cpu => self.render_tiles(scene, options, |first_row, frame| {
+                let rows = ImageRows {
+                    color: options.color.then(|| image_io::color_image(&frame).into_raw()),
+                    normals: options.normals.then(|| image_io::normals_image(&frame).into_raw()),
+                    depth: options.depth.then(|| image_io::depth_image(&frame, min, max).into_raw()),
+                };
+                on_tile(first_row, rows)
+            }),
+        }
+    }
+}
+
+/// One tile's rows of each 8-bit image asked for, RGB, top row first.
+pub struct ImageRows {
+    pub color: Option<Vec<u8>>,
+    pub normals: Option<Vec<u8>>,
+    pub depth: Option<Vec<u8>>,
 }

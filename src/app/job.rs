@@ -44,37 +44,22 @@ pub fn run(args: &RenderArgs, backend: &Backend) -> Result<Vec<String>, Error> {
 /// memory stays bounded by the tile whatever the image size.
 pub fn render_scene(scene: &Scene, args: &RenderArgs, backend: &Backend) -> Result<(), Error> {
     let options = options_for(args);
-    let mut outputs = Vec::new();
-    if let Some(path) = &args.output {
-        outputs.push((ImageFile::create(path, args.width, args.height)?, Kind::Color));
-    }
-    if let Some(path) = &args.normals {
-        outputs.push((ImageFile::create(path, args.width, args.height)?, Kind::Normals));
-    }
-    if let Some(depth) = &args.depth {
-        outputs.push((ImageFile::create(&depth.path, args.width, args.height)?, Kind::Depth(depth.min, depth.max)));
-    }
-    backend.render_tiles(scene, &options, |_first_row, tile| {
-        for (file, kind) in &mut outputs {
-            let rows = match *kind {
-                Kind::Color => image_io::color_image(&tile),
-                Kind::Normals => image_io::normals_image(&tile),
-                Kind::Depth(min, max) => image_io::depth_image(&tile, min, max),
-            };
-            file.write_rows(rows.as_raw())?;
+    let mut color = args.output.as_ref().map(|p| ImageFile::create(p, args.width, args.height)).transpose()?;
+    let mut normals = args.normals.as_ref().map(|p| ImageFile::create(p, args.width, args.height)).transpose()?;
+    let mut depth = args.depth.as_ref().map(|d| ImageFile::create(&d.path, args.width, args.height)).transpose()?;
+    let depth_range = args.depth.as_ref().map_or((0.0, 1.0), |d| (d.min, d.max));
+    backend.render_images(scene, &options, depth_range, |_first_row, rows| {
+        for (file, rows) in [(&mut color, rows.color), (&mut normals, rows.normals), (&mut depth, rows.depth)] {
+            if let (Some(file), Some(rows)) = (file.as_mut(), rows) {
+                file.write_rows(&rows)?;
+            }
         }
         Ok::<(), Error>(())
     })?;
-    let finished = outputs.into_iter().map(|(file, _)| file.finish()).collect::<Result<Vec<_>, _>>()?;
+    let finished =
+        [color, normals, depth].into_iter().flatten().map(ImageFile::finish).collect::<Result<Vec<_>, _>>()?;
     image_io::persist_all(finished)?;
     Ok(())
-}
-
-/// Which image an output file receives.
-enum Kind {
-    Color,
-    Normals,
-    Depth(f32, f32),
 }
 
 /// What `raycaster compare` found: the GPU against the reference, per output.
