@@ -4,7 +4,7 @@ mod app;
 
 use app::backend::Backend;
 use app::cli::{self, BackendChoice, Command, Outputs, RenderArgs};
-use app::exit::{self, say, Failure};
+use app::exit::{self, note, say, Failure};
 use raycaster::scene::SceneWarning;
 use std::process::ExitCode;
 
@@ -77,7 +77,7 @@ fn bench(args: &cli::BenchArgs) -> Result<(), Failure> {
         .collect::<Vec<_>>();
     let mut rows = Vec::new();
     for case in &cases {
-        eprintln!("bench: {} {}×{} ({})", case.name, case.width, case.height, case.triangle_test.name());
+        note(&format!("bench: {} {}×{} ({})", case.name, case.width, case.height, case.triangle_test.name()));
         rows.push(bench::run_case(&gpu, case, args.runs).map_err(|e| failed(&format!("{}: {e}", case.name)))?);
     }
     exit::print(&bench::markdown(&rows, &gpu.adapter_info().name))?;
@@ -86,11 +86,11 @@ fn bench(args: &cli::BenchArgs) -> Result<(), Failure> {
         .and_then(|()| std::fs::write(args.out.join("bench.csv"), bench::csv(&rows)).map_err(|e| e.to_string()))
         .and_then(|()| write_plot(&rows, &args.out))
         .map_err(|e| failed(&e))?;
-    eprintln!(
+    note(&format!(
         "bench: wrote {}/bench.csv{}",
         args.out.display(),
         if cfg!(feature = "plot") { " and bench.png" } else { "" }
-    );
+    ));
     Ok(())
 }
 

@@ -534,6 +534,40 @@ mod tests {
             .contains("cramer, moller, watertight"));
     }
 
+    /// `compare` takes `--outputs` instead of file names (or both), and refuses `--backend`.
+    #[test]
+    fn compare_outputs() {
+        match parse("compare -input s -size 2 2 --outputs depth,colour -normals n.tga") {
+            Ok(Command::Compare { args, outputs, max_diff_pixels: None }) => {
+                assert_eq!(outputs, Outputs { color: true, normals: true, depth: true });
+                assert_eq!((args.output, args.depth), (None, None));
+            }
+            other => panic!("{other:?}"),
+        }
+        let cases = [
+            ("compare -input s -size 2 2 --outputs color --backend gpu", "compare: --backend does not apply"),
+            ("compare -input s -size 2 2 --outputs color --outputs depth", "--outputs is given twice"),
+            ("compare -input s -size 2 2 --outputs color,", "--outputs: '' is not one of"),
+            ("compare -input s -size 2 2", "nothing to compare"),
+            ("-input s -size 2 2 --outputs color", "unknown flag '--outputs'"),
+        ];
+        for (line, needle) in cases {
+            assert!(parse(line).expect_err(line).0.contains(needle), "{line}: {:?}", parse(line));
+        }
+    }
+
+    /// Two outputs naming one file are refused, however the name is spelled; compare writes
+    /// no file, so it does not mind.
+    #[test]
+    fn outputs_must_name_distinct_files() {
+        let err = parse("-input s -size 1 1 -normals a.tga -depth 0 1 ./a.tga").unwrap_err();
+        assert_eq!(err.0, "-normals a.tga and -depth ./a.tga name the same file: one image would replace the other");
+        // Unit tests run in the package root, which has a src folder.
+        assert!(parse("-input s -size 1 1 -output a.tga -normals src/../a.tga").unwrap_err().0.contains("same file"));
+        assert!(parse("-input s -size 1 1 -output a.tga -normals b.tga -depth 0 1 c.png").is_ok());
+        assert!(parse("compare -input s -size 1 1 -output a.tga -normals a.tga").is_ok());
+    }
+
     #[test]
     fn batch() {
         assert_eq!(

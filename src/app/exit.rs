@@ -48,10 +48,15 @@ pub fn report(failure: &Failure) -> u8 {
     failure.status()
 }
 
-/// One line on stderr, `raycaster: ` first. A closed stderr is ignored (there is no one
-/// left to tell).
+/// One line on stderr, `raycaster: ` first.
 pub fn say(line: &str) {
-    let _ = writeln!(std::io::stderr().lock(), "raycaster: {line}");
+    note(&format!("raycaster: {line}"));
+}
+
+/// One line on stderr as it is (progress). A closed stderr is ignored: there is no one left
+/// to tell.
+pub fn note(line: &str) {
+    let _ = writeln!(std::io::stderr().lock(), "{line}");
 }
 
 /// Text on stdout. A reader that has gone away (a closed pipe) drops the rest quietly; any
