@@ -113,11 +113,8 @@ fn open_backend(choice: BackendChoice) -> Result<Backend, Failure> {
     Ok(backend)
 }
 
-fn open_gpu() -> Result<Box<raycaster::gpu::GpuRenderer>, Failure> {
-    match open_backend(BackendChoice::Gpu)? {
-        Backend::Gpu(gpu) => Ok(gpu),
-        Backend::Cpu => unreachable!("BackendChoice::Gpu opens the GPU or fails"),
-    }
+fn open_gpu() -> Result<raycaster::gpu::GpuRenderer, Failure> {
+    Ok(raycaster::gpu::GpuRenderer::new()?)
 }
 
 fn warn(warnings: &[SceneWarning]) {

@@ -307,7 +307,7 @@ fn compare_fails_by_default_beyond_the_parity_limit() {
     assert_eq!(message.trim_end().lines().count(), 1, "{message}");
     assert!(message.starts_with("raycaster: compare: normals: "), "{message}");
     assert!(
-        message.contains("pixels are more than 1 level off the reference; the limit is 10 (0.1 % of 10000 pixels)"),
+        message.contains("of 10000 pixels are more than 1 level off the reference; the limit is 10 (0.1 %)"),
         "{message}"
     );
 

@@ -108,16 +108,18 @@ impl Comparison {
 fn output_failure(errors: &OutputErrors, max_diff_pixels: Option<u64>) -> Option<String> {
     let name = errors.output.name();
     if errors.non_finite > 0 {
-        return Some(format!("{name}: the GPU produced {} NaN or infinite values (limit 0)", errors.non_finite));
+        return Some(format!("{name}: {} NaN or infinite values from the GPU (limit 0)", errors.non_finite));
     }
     let pixels = errors.image.pixels as u64;
     let (limit, origin) = match max_diff_pixels {
-        Some(n) => (n, "--max-diff-pixels".to_string()),
-        None => (pixels * DEFAULT_LIMIT_PER_MILLE / 1000, format!("0.1 % of {pixels} pixels")),
+        Some(n) => (n, "--max-diff-pixels"),
+        None => (pixels * DEFAULT_LIMIT_PER_MILLE / 1000, "0.1 %"),
     };
     let off = errors.image.off_by_more_than_one as u64;
     (off > limit).then(|| {
-        format!("{name}: {off} pixels are more than 1 level off the reference; the limit is {limit} ({origin})")
+        format!(
+            "{name}: {off} of {pixels} pixels are more than 1 level off the reference; the limit is {limit} ({origin})"
+        )
     })
 }
 
@@ -188,4 +190,53 @@ pub fn run_batch(text: &str, backend: &Backend, mut report: impl FnMut(usize, Li
         report(line_number, LineReport::Failure(failure));
     }
     count
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use raycaster::metrics::{ImageDiff, Output};
+
+    fn errors(output: Output, pixels: usize, off: usize, non_finite: usize) -> OutputErrors {
+        OutputErrors {
+            output,
+            image: ImageDiff { pixels, off_by_more_than_one: off, max: 2, mean: 0.0 },
+            hit_mismatches: 0,
+            float_max: 0.0,
+            float_mean: 0.0,
+            relative_max: None,
+            non_finite,
+        }
+    }
+
+    fn verdict(outputs: Vec<OutputErrors>, max_diff_pixels: Option<u64>) -> Result<(), String> {
+        Comparison { errors: outputs, warnings: Vec::new() }.verdict(max_diff_pixels)
+    }
+
+    /// 0.1 % of 10000 pixels is 10: 10 off passes, 11 fails; 1999 pixels allow 1.
+    #[test]
+    fn the_default_limit_is_a_tenth_of_a_percent() {
+        assert_eq!(verdict(vec![errors(Output::Color, 10_000, 10, 0)], None), Ok(()));
+        assert_eq!(
+            verdict(vec![errors(Output::Color, 10_000, 11, 0), errors(Output::Depth, 1999, 2, 0)], None),
+            Err("compare: colour: 11 of 10000 pixels are more than 1 level off the reference; the limit is 10 \
+                 (0.1 %); depth: 2 of 1999 pixels are more than 1 level off the reference; the limit is 1 (0.1 %)"
+                .into())
+        );
+    }
+
+    #[test]
+    fn max_diff_pixels_overrides_and_nan_always_fails() {
+        assert_eq!(verdict(vec![errors(Output::Normals, 100, 100, 0)], Some(100)), Ok(()));
+        assert_eq!(
+            verdict(vec![errors(Output::Normals, 100, 4, 0)], Some(3)),
+            Err("compare: normals: 4 of 100 pixels are more than 1 level off the reference; the limit is 3 \
+                 (--max-diff-pixels)"
+                .into())
+        );
+        assert_eq!(
+            verdict(vec![errors(Output::Depth, 100, 0, 1)], Some(100)),
+            Err("compare: depth: 1 NaN or infinite values from the GPU (limit 0)".into())
+        );
+    }
 }
