@@ -2,11 +2,16 @@
 //!
 //! Every channel is clamped to [0, 1] and stored as `floor(255·v)`: truncation, as the
 //! course's own images are made.
+//!
+//! Images are written into temporary files beside their destinations. The process keeps a
+//! list of those still live, so that a program interrupted mid-render can remove them all
+//! with [`remove_temporary_files_for_exit`] before it ends.
 
 use crate::render::Frame;
 use image::RgbImage;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
+use std::sync::{Mutex, MutexGuard, PoisonError};
 
 /// SPEC §5: `floor(255·clamp(v, 0, 1))`. NaN becomes 0.
 pub fn quantize(v: f32) -> u8 {
@@ -80,7 +85,7 @@ pub struct ImageError {
 /// what one call passes in, so any image the formats allow can be written.
 pub struct ImageFile {
     path: PathBuf,
-    temp: tempfile::NamedTempFile,
+    temp: LiveTemp,
     encoder: Encoder,
     width: u32,
     height: u32,
@@ -101,18 +106,14 @@ impl ImageFile {
     /// Starts `path` (format from its extension) for a `width × height` image.
     pub fn create(path: &Path, width: u32, height: u32) -> Result<ImageFile, ImageError> {
         let fail = |message: String| ImageError { path: path.to_path_buf(), message };
+        if path.is_dir() {
+            return Err(fail("is a folder, not an image file name".into()));
+        }
         let format = ImageFormat::from_path(path)
             .ok_or_else(|| fail("unsupported image format (use a .tga or .png file name)".into()))?;
-        let dir = match path.parent() {
-            Some(p) if !p.as_os_str().is_empty() => p,
-            _ => Path::new("."),
-        };
-        let temp = tempfile::Builder::new()
-            .prefix(".raycaster-")
-            .suffix(".tmp")
-            .tempfile_in(dir)
-            .map_err(|e| fail(format!("cannot create a file in {}: {e}", dir.display())))?;
-        let file = temp.as_file().try_clone().map_err(|e| fail(e.to_string()))?;
+        let dir = folder_of(path);
+        let temp = LiveTemp::create_in(dir).map_err(|e| fail(cannot_create_in(dir, &e)))?;
+        let file = temp.file().try_clone().map_err(|e| fail(e.to_string()))?;
         let encoder = match format {
             ImageFormat::Tga => Encoder::Tga(tga_start(file, width, height).map_err(|e| fail(e.to_string()))?),
             ImageFormat::Png => {
@@ -148,7 +149,7 @@ impl ImageFile {
         };
         let fail = |message: String| ImageError { path: self.path.clone(), message };
         result.map_err(|e| fail(e.to_string()))?;
-        make_readable(&self.temp).map_err(|e| fail(e.to_string()))?;
+        make_readable(self.temp.file()).map_err(|e| fail(e.to_string()))?;
         Ok(FinishedImage { path: self.path, temp: self.temp })
     }
 
@@ -160,19 +161,99 @@ impl ImageFile {
 /// A complete image in its temporary file.
 pub struct FinishedImage {
     path: PathBuf,
-    temp: tempfile::NamedTempFile,
+    temp: LiveTemp,
 }
 
 /// Renames every finished image into place. Called only once all are complete, so a failed
-/// run leaves no image half-written (and, short of a failing rename, none at all).
+/// run leaves no image half-written (and, short of a failing rename, none at all). An
+/// interrupt that arrives meanwhile waits until the whole set is in place.
 pub fn persist_all(images: Vec<FinishedImage>) -> Result<(), ImageError> {
+    let mut live = live_temp_files();
     for image in images {
-        image
-            .temp
-            .persist(&image.path)
-            .map_err(|e| ImageError { path: image.path.clone(), message: e.error.to_string() })?;
+        image.temp.persist(&mut live, &image.path).map_err(|e| ImageError { path: image.path.clone(), message: e })?;
     }
     Ok(())
+}
+
+/// The temporary files of the images being written in this process.
+static LIVE_TEMP_FILES: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+/// The list, locked. A panic elsewhere cannot leave it wrong (each change is one push or
+/// one removal), so a poisoned lock is still used.
+fn live_temp_files() -> MutexGuard<'static, Vec<PathBuf>> {
+    LIVE_TEMP_FILES.lock().unwrap_or_else(PoisonError::into_inner)
+}
+
+/// Removes the temporary file of every image still being written in this process, and
+/// keeps the list locked for good, so that no other temporary file can be created or renamed
+/// into place afterwards (those calls block). For a signal handler that ends the process
+/// right after: an interrupted render leaves no file behind. Returns how many were removed.
+pub fn remove_temporary_files_for_exit() -> usize {
+    let mut live = live_temp_files();
+    let removed = live.drain(..).filter(|path| std::fs::remove_file(path).is_ok()).count();
+    std::mem::forget(live);
+    removed
+}
+
+/// A temporary file beside an image's destination, on the list of live ones from its
+/// creation until it is renamed into place or dropped (which deletes it).
+struct LiveTemp(Option<tempfile::NamedTempFile>);
+
+impl LiveTemp {
+    fn create_in(dir: &Path) -> std::io::Result<LiveTemp> {
+        // Locked across creation, so an interrupt cannot fall between creating and listing.
+        let mut live = live_temp_files();
+        let temp = tempfile::Builder::new().prefix(".raycaster-").suffix(".tmp").tempfile_in(dir)?;
+        live.push(temp.path().to_path_buf());
+        Ok(LiveTemp(Some(temp)))
+    }
+
+    fn file(&self) -> &std::fs::File {
+        self.0.as_ref().expect("a LiveTemp holds its file until persisted or dropped").as_file()
+    }
+
+    /// Renames the file to `path`; `live` is the locked list, held by the caller.
+    fn persist(mut self, live: &mut Vec<PathBuf>, path: &Path) -> Result<(), String> {
+        let temp = self.0.take().expect("a LiveTemp is persisted once");
+        unlist(live, temp.path());
+        // On failure the returned file is dropped here, which deletes it.
+        temp.persist(path).map(drop).map_err(|e| e.error.to_string())
+    }
+}
+
+impl Drop for LiveTemp {
+    fn drop(&mut self) {
+        if let Some(temp) = self.0.take() {
+            let mut live = live_temp_files();
+            unlist(&mut live, temp.path());
+            drop(temp);
+        }
+    }
+}
+
+fn unlist(live: &mut Vec<PathBuf>, path: &Path) {
+    live.retain(|p| p != path);
+}
+
+/// The folder a file goes into (`.` for a bare file name).
+fn folder_of(path: &Path) -> &Path {
+    match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    }
+}
+
+/// Why no file could be created in `dir`, in terms of the user's paths only: the error the
+/// temporary-file crate returns names the temporary file, which the user never asked for.
+fn cannot_create_in(dir: &Path, e: &std::io::Error) -> String {
+    use std::io::ErrorKind;
+    let dir = dir.display();
+    match e.kind() {
+        ErrorKind::NotFound => format!("cannot write there: the folder {dir} does not exist"),
+        ErrorKind::NotADirectory => format!("cannot write there: {dir} is not a folder"),
+        ErrorKind::PermissionDenied => format!("cannot write there: no permission to create files in {dir}"),
+        kind => format!("cannot create a file in {dir}: {kind}"),
+    }
 }
 
 /// Writes every `(path, image)` pair, or none of them (see [`ImageFile`]).
@@ -232,13 +313,13 @@ fn png_start(
 
 /// Temporary files are private (0600); an image is an ordinary file (0644).
 #[cfg(unix)]
-fn make_readable(temp: &tempfile::NamedTempFile) -> std::io::Result<()> {
+fn make_readable(file: &std::fs::File) -> std::io::Result<()> {
     use std::os::unix::fs::PermissionsExt;
-    temp.as_file().set_permissions(std::fs::Permissions::from_mode(0o644))
+    file.set_permissions(std::fs::Permissions::from_mode(0o644))
 }
 
 #[cfg(not(unix))]
-fn make_readable(_: &tempfile::NamedTempFile) -> std::io::Result<()> {
+fn make_readable(_: &std::fs::File) -> std::io::Result<()> {
     Ok(())
 }
 

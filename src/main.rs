@@ -3,131 +3,95 @@
 mod app;
 
 use app::backend::Backend;
-use app::cli::{self, BackendChoice, Command, RenderArgs};
+use app::cli::{self, BackendChoice, Command, Outputs, RenderArgs};
+use app::exit::{self, note, say, Failure};
+use raycaster::scene::SceneWarning;
 use std::process::ExitCode;
 
+/// The one place an error ends the command: it is printed once, as `raycaster: ERROR`, and
+/// its kind sets the exit status (2 usage, 1 failure; the signal thread reports 130/143 the
+/// same way).
 fn main() -> ExitCode {
     give_mesa_a_runtime_dir();
-    match cli::parse_args(std::env::args_os().skip(1)) {
-        Ok(Command::Help) => {
-            println!("{}", cli::USAGE);
-            ExitCode::SUCCESS
-        }
-        Ok(Command::Render(args)) => render(&args),
-        Ok(Command::Compare { args, max_diff_pixels }) => compare(&args, max_diff_pixels),
-        Ok(Command::Batch { file, backend }) => batch(&file, backend),
-        Ok(Command::Bench(bench_args)) => bench(&bench_args),
-        Err(e) => {
-            eprintln!("raycaster: {e}");
-            ExitCode::from(2)
-        }
+    match run() {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(failure) => ExitCode::from(exit::report(&failure)),
     }
 }
 
-fn render(args: &RenderArgs) -> ExitCode {
-    let Some(backend) = open_backend(args.backend) else { return ExitCode::FAILURE };
-    match app::job::run(args, &backend) {
-        Ok(warnings) => {
-            warn(&warnings);
-            ExitCode::SUCCESS
-        }
-        Err(e) => {
-            eprintln!("raycaster: {e}");
-            ExitCode::FAILURE
-        }
+fn run() -> Result<(), Failure> {
+    app::signals::clean_up_on_interrupt().map_err(|e| Failure::Failed(format!("cannot handle signals: {e}")))?;
+    match cli::parse_args(std::env::args_os().skip(1))? {
+        Command::Help => exit::print(&format!("{}\n", cli::USAGE)),
+        Command::Render(args) => render(&args),
+        Command::Compare { args, outputs, max_diff_pixels } => compare(&args, outputs, max_diff_pixels),
+        Command::Batch { file, backend } => batch(&file, backend),
+        Command::Bench(bench_args) => bench(&bench_args),
     }
 }
 
-fn compare(args: &RenderArgs, max_diff_pixels: Option<u64>) -> ExitCode {
-    let Some(Backend::Gpu(gpu)) = open_backend(BackendChoice::Gpu) else { return ExitCode::FAILURE };
-    match app::job::compare(args, &gpu) {
-        Ok(comparison) => {
-            warn(&comparison.warnings);
-            println!(
-                "gpu ({}) against the f64 reference ({} triangles, {} spheres):",
-                gpu.adapter_info().name,
-                args.triangle_test.name(),
-                args.sphere_test.name()
-            );
-            print!("{}", raycaster::metrics::errors_table(&comparison.errors));
-            if comparison.passes(max_diff_pixels) {
-                ExitCode::SUCCESS
-            } else {
-                eprintln!("raycaster: compare: the GPU's result exceeds the limit or holds NaN/infinity");
-                ExitCode::FAILURE
-            }
-        }
-        Err(e) => {
-            eprintln!("raycaster: {e}");
-            ExitCode::FAILURE
-        }
-    }
+fn render(args: &RenderArgs) -> Result<(), Failure> {
+    let backend = open_backend(args.backend)?;
+    warn(&app::job::run(args, &backend)?);
+    Ok(())
 }
 
-fn batch(file: &std::path::Path, choice: BackendChoice) -> ExitCode {
-    let text = match std::fs::read_to_string(file) {
-        Ok(text) => text,
-        Err(e) => {
-            eprintln!("raycaster: {}: {e}", file.display());
-            return ExitCode::FAILURE;
-        }
-    };
-    let Some(backend) = open_backend(choice) else { return ExitCode::FAILURE };
-    let (warnings, failures) = app::job::run_batch(&text, &backend);
-    warn(&warnings);
-    for f in &failures {
-        eprintln!("raycaster: {}:{}: {}", file.display(), f.line, f.message);
-    }
-    if failures.is_empty() {
-        ExitCode::SUCCESS
-    } else {
-        ExitCode::FAILURE
-    }
+fn compare(args: &RenderArgs, outputs: Outputs, max_diff_pixels: Option<u64>) -> Result<(), Failure> {
+    let gpu = open_gpu()?;
+    let comparison = app::job::compare(args, outputs, &gpu)?;
+    warn(&comparison.warnings);
+    exit::print(&format!(
+        "gpu ({}) against the f64 reference ({} triangles, {} spheres):\n{}",
+        gpu.adapter_info().name,
+        args.triangle_test.name(),
+        args.sphere_test.name(),
+        raycaster::metrics::errors_table(&comparison.errors)
+    ))?;
+    comparison.verdict(max_diff_pixels).map_err(Failure::Failed)
 }
 
-fn bench(args: &cli::BenchArgs) -> ExitCode {
+fn batch(file: &std::path::Path, choice: BackendChoice) -> Result<(), Failure> {
+    let text = std::fs::read_to_string(file).map_err(|e| Failure::Failed(format!("{}: {e}", file.display())))?;
+    let backend = open_backend(choice)?;
+    let count =
+        app::job::run_batch(&text, &backend, |line, report| say(&format!("{}:{line}: {report}", file.display())));
+    if count.failed > 0 {
+        return Err(Failure::Failed(format!(
+            "{}: {} of {} command lines failed",
+            file.display(),
+            count.failed,
+            count.run
+        )));
+    }
+    Ok(())
+}
+
+fn bench(args: &cli::BenchArgs) -> Result<(), Failure> {
     use app::bench;
-    let Some(Backend::Gpu(gpu)) = open_backend(BackendChoice::Gpu) else { return ExitCode::FAILURE };
-    let cases = match bench::standard_cases(&args.corpus, args.quick) {
-        Ok(cases) => cases
-            .into_iter()
-            .filter(|c| args.only.as_ref().is_none_or(|o| c.name.contains(o.as_str())))
-            .collect::<Vec<_>>(),
-        Err(e) => {
-            eprintln!("raycaster: bench: {e}");
-            return ExitCode::FAILURE;
-        }
-    };
+    let gpu = open_gpu()?;
+    let failed = |e: &dyn std::fmt::Display| Failure::Failed(format!("bench: {e}"));
+    let cases = bench::standard_cases(&args.corpus, args.quick)
+        .map_err(|e| failed(&e))?
+        .into_iter()
+        .filter(|c| args.only.as_ref().is_none_or(|o| c.name.contains(o.as_str())))
+        .collect::<Vec<_>>();
     let mut rows = Vec::new();
     for case in &cases {
-        eprintln!("bench: {} {}×{} ({})", case.name, case.width, case.height, case.triangle_test.name());
-        match bench::run_case(&gpu, case, args.runs) {
-            Ok(row) => rows.push(row),
-            Err(e) => {
-                eprintln!("raycaster: bench: {}: {e}", case.name);
-                return ExitCode::FAILURE;
-            }
-        }
+        note(&format!("bench: {} {}×{} ({})", case.name, case.width, case.height, case.triangle_test.name()));
+        rows.push(bench::run_case(&gpu, case, args.runs).map_err(|e| failed(&format!("{}: {e}", case.name)))?);
     }
-    print!("{}", bench::markdown(&rows, &gpu.adapter_info().name));
-    let written = std::fs::create_dir_all(&args.out)
+    exit::print(&bench::markdown(&rows, &gpu.adapter_info().name))?;
+    std::fs::create_dir_all(&args.out)
         .map_err(|e| format!("{}: {e}", args.out.display()))
         .and_then(|()| std::fs::write(args.out.join("bench.csv"), bench::csv(&rows)).map_err(|e| e.to_string()))
-        .and_then(|()| write_plot(&rows, &args.out));
-    match written {
-        Ok(()) => {
-            eprintln!(
-                "bench: wrote {}/bench.csv{}",
-                args.out.display(),
-                if cfg!(feature = "plot") { " and bench.png" } else { "" }
-            );
-            ExitCode::SUCCESS
-        }
-        Err(e) => {
-            eprintln!("raycaster: bench: {e}");
-            ExitCode::FAILURE
-        }
-    }
+        .and_then(|()| write_plot(&rows, &args.out))
+        .map_err(|e| failed(&e))?;
+    note(&format!(
+        "bench: wrote {}/bench.csv{}",
+        args.out.display(),
+        if cfg!(feature = "plot") { " and bench.png" } else { "" }
+    ));
+    Ok(())
 }
 
 #[cfg(feature = "plot")]
@@ -141,24 +105,21 @@ fn write_plot(_: &[app::bench::Row], _: &std::path::Path) -> Result<(), String> 
     Ok(())
 }
 
-fn open_backend(choice: BackendChoice) -> Option<Backend> {
-    match Backend::open(choice) {
-        Ok((backend, notice)) => {
-            if let Some(notice) = notice {
-                eprintln!("raycaster: {notice}");
-            }
-            Some(backend)
-        }
-        Err(e) => {
-            eprintln!("raycaster: {e}");
-            None
-        }
+fn open_backend(choice: BackendChoice) -> Result<Backend, Failure> {
+    let (backend, notice) = Backend::open(choice)?;
+    if let Some(notice) = notice {
+        say(&notice);
     }
+    Ok(backend)
 }
 
-fn warn(warnings: &[String]) {
+fn open_gpu() -> Result<raycaster::gpu::GpuRenderer, Failure> {
+    Ok(raycaster::gpu::GpuRenderer::new()?)
+}
+
+fn warn(warnings: &[SceneWarning]) {
     for w in warnings {
-        eprintln!("raycaster: warning: {w}");
+        say(&w.to_string());
     }
 }
 /// Mesa's Vulkan drivers print "XDG_RUNTIME_DIR is invalid or not set" on every start when

@@ -313,11 +313,15 @@ fn no_lights_means_flat_ambient_with_a_warning() {
     assert_eq!(scene.background.ambient, DVec3::ONE);
     assert_eq!(scene.background.color, DVec3::splat(0.5));
     assert_eq!(scene.warnings.len(), 1);
-    assert!(scene.warnings[0].contains("no lights"), "{:?}", scene.warnings);
+    // No Lights block: the warning is about the file as a whole, as "no camera" is.
+    assert_eq!(scene.warnings[0].to_string(), "test.txt: warning: no lights: ambient light set to 1 1 1 (flat colour)");
 
     let scene = parse(&format!("{CAMERA} Lights {{ numLights 0 }} Background {{ ambientLight 0.2 0.3 0.4 }}"));
     assert_eq!(scene.background.ambient, DVec3::ONE);
-    assert!(scene.warnings[0].contains("ambientLight 0.2 0.3 0.4"), "{:?}", scene.warnings);
+    // An empty Lights block: the warning points at it.
+    let lights_col = CAMERA.chars().count() as u32 + 2;
+    assert_eq!(scene.warnings[0].location, Some(Location { line: 1, col: lights_col }));
+    assert!(scene.warnings[0].message.contains("ambientLight 0.2 0.3 0.4"), "{:?}", scene.warnings);
 
     // With lights, the file's ambient light stays.
     let scene = parse(&format!("{CAMERA} {LIGHTS} Background {{ ambientLight 0.2 0.3 0.4 }}"));
@@ -352,9 +356,14 @@ fn materials_default_colour_and_phong_warns_once() {
     ));
     let diffuse: Vec<DVec3> = scene.materials.iter().map(|m| m.diffuse).collect();
     assert_eq!(diffuse, vec![DVec3::ONE, DVec3::new(0.1, 0.2, 0.3), DVec3::ONE]);
+    // One warning, at the first PhongMaterial (line 1, after the camera, lights and `Materials { numMaterials 3 Material { } `).
+    let col = format!("{CAMERA} {LIGHTS} Materials {{ numMaterials 3 Material {{ }} ").chars().count() as u32 + 1;
+    let messages: Vec<String> = scene.warnings.iter().map(|w| w.to_string()).collect();
     assert_eq!(
-        scene.warnings,
-        vec!["PhongMaterial: specular, reflective and transparent terms are ignored".to_string()]
+        messages,
+        vec![format!(
+            "test.txt:1:{col}: warning: PhongMaterial: specular, reflective and transparent terms are ignored"
+        )]
     );
 }
 

@@ -6,7 +6,7 @@ use raycaster::image_io::ImageFormat;
 use raycaster::render::{SphereTest, TriangleTest};
 use std::ffi::OsString;
 use std::fmt;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// The largest image side: TGA stores sizes in 16 bits.
 pub const MAX_SIDE: u32 = 65535;
@@ -45,11 +45,13 @@ raycaster bench [--quick] [--runs N] [--out DIR] [--corpus DIR] [--only NAME]
   and DIR/bench.png (default DIR target/bench, corpus ../shared/mit6837, 5 runs).
   --quick: a few small cases, seconds in all. --only: the cases whose name contains NAME.
 
-raycaster compare ... [--max-diff-pixels N]
-  Renders the outputs named with the GPU and with the f64 reference, writes no file, and
-  prints their differences per output: pixels more than 1 level apart, hit/miss
-  disagreements, depth and normal errors, NaN/inf counts. Exits 1 when an output has more
-  than N pixels off by more than 1 level, or the GPU produced NaN or infinity.
+raycaster compare -input SCENE -size W H --outputs color,normals,depth [--max-diff-pixels N]
+  Renders the outputs listed (or named by -output, -normals, -depth, whose files are not
+  written) with the GPU and with the f64 reference, and prints their differences per
+  output: pixels more than 1 level apart, hit/miss disagreements, depth and normal errors,
+  NaN/inf counts. Exits 1 when an output has more than 0.1 % of its pixels (or N pixels)
+  more than 1 level off, or the GPU produced NaN or infinity. Takes the kernel flags and
+  -shade_back; not --backend (it always runs both).
 
 Flags take one or two dashes; `-shade_back` and `--shade-back` are the same.
 At least one of -output, -normals, -depth is required.";
@@ -88,9 +90,11 @@ pub struct DepthArgs {
 #[derive(Clone, Debug, PartialEq)]
 pub enum Command {
     Render(RenderArgs),
-    /// `raycaster compare`: GPU against the reference, nothing written.
+    /// `raycaster compare`: GPU against the reference, nothing written. `args`' file names
+    /// only say which outputs to compare; `outputs` is the union of them and `--outputs`.
     Compare {
         args: RenderArgs,
+        outputs: Outputs,
         max_diff_pixels: Option<u64>,
     },
     /// `raycaster batch FILE`: one render command line per line of FILE, in one process.
@@ -101,6 +105,14 @@ pub enum Command {
     /// `raycaster bench`: speed and error per scene and size.
     Bench(BenchArgs),
     Help,
+}
+
+/// Which images to compute.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Outputs {
+    pub color: bool,
+    pub normals: bool,
+    pub depth: bool,
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -145,6 +157,7 @@ where
     let compare = args.first().is_some_and(|a| a == "compare");
     let mut values = Values { args: &args, next: usize::from(compare) };
     let mut max_diff_pixels = None;
+    let mut listed_outputs = None;
     let mut triangle_test = TriangleTest::default();
     let mut sphere_test = SphereTest::default();
     let mut input = None;
@@ -181,7 +194,12 @@ where
                 depth = Some(values.depth(&text)?);
             }
             "shade_back" => shade_back = true,
+            "backend" if compare => return Err(not_for_compare(&text)),
             "backend" => backend = values.backend(&text)?,
+            "outputs" if compare => {
+                set_once(listed_outputs.is_some())?;
+                listed_outputs = Some(values.outputs(&text)?);
+            }
             "triangle_test" => triangle_test = values.choice(&text, &TriangleTest::ALL.map(|t| (t.name(), t)))?,
             "sphere_test" => sphere_test = values.choice(&text, &SphereTest::ALL.map(|t| (t.name(), t)))?,
             "max_diff_pixels" if compare => {
@@ -198,15 +216,85 @@ where
     }
     let input = input.ok_or_else(|| UsageError("-input SCENE is required".into()))?;
     let (width, height) = size.ok_or_else(|| UsageError("-size W H is required".into()))?;
-    if output.is_none() && normals.is_none() && depth.is_none() {
-        return Err(UsageError("nothing to write: give -output, -normals or -depth".into()));
-    }
     let args =
         RenderArgs { input, width, height, output, normals, depth, shade_back, backend, triangle_test, sphere_test };
     if compare {
-        return Ok(Command::Compare { args, max_diff_pixels });
+        return compare_command(args, listed_outputs.unwrap_or_default(), max_diff_pixels);
     }
+    render_command(args)
+}
+
+/// A render command line, once its flags are read: it must write something, and no two
+/// outputs may name one file.
+fn render_command(args: RenderArgs) -> Result<Command, UsageError> {
+    if output_paths(&args).is_empty() {
+        return Err(UsageError("nothing to write: give -output, -normals or -depth".into()));
+    }
+    check_distinct_outputs(&args)?;
     Ok(Command::Render(args))
+}
+
+/// `compare`, once its flags are read: it compares the outputs listed with `--outputs` and
+/// those given a file name (the old form), and needs at least one.
+fn compare_command(args: RenderArgs, listed: Outputs, max_diff_pixels: Option<u64>) -> Result<Command, UsageError> {
+    let outputs = Outputs {
+        color: listed.color || args.output.is_some(),
+        normals: listed.normals || args.normals.is_some(),
+        depth: listed.depth || args.depth.is_some(),
+    };
+    if outputs == Outputs::default() {
+        return Err(UsageError("compare: nothing to compare: give --outputs color,normals,depth".into()));
+    }
+    Ok(Command::Compare { args, outputs, max_diff_pixels })
+}
+
+fn not_for_compare(flag: &str) -> UsageError {
+    UsageError(format!(
+        "compare: {flag} does not apply: compare always renders with both the GPU and the f64 reference"
+    ))
+}
+
+/// The image files a render writes, with the flag naming each.
+fn output_paths(args: &RenderArgs) -> Vec<(&'static str, &Path)> {
+    let depth = args.depth.as_ref().map(|d| d.path.as_path());
+    [("-output", args.output.as_deref()), ("-normals", args.normals.as_deref()), ("-depth", depth)]
+        .into_iter()
+        .filter_map(|(flag, path)| Some((flag, path?)))
+        .collect()
+}
+
+/// Refuses two outputs naming one file: one image would silently replace the other.
+fn check_distinct_outputs(args: &RenderArgs) -> Result<(), UsageError> {
+    let paths = output_paths(args);
+    for (k, &(first_flag, first)) in paths.iter().enumerate() {
+        if let Some((flag, path)) = paths[k + 1..].iter().find(|(_, path)| same_file(first, path)) {
+            return Err(UsageError(format!(
+                "{first_flag} {} and {flag} {} name the same file: one image would replace the other",
+                first.display(),
+                path.display()
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// Whether two output paths name one file: equal as written, or once their folders are
+/// resolved (`a.tga`, `./a.tga` and `out/../a.tga` are one file).
+fn same_file(a: &Path, b: &Path) -> bool {
+    a == b || resolved(a).is_some_and(|a| resolved(b) == Some(a))
+}
+
+fn resolved(path: &Path) -> Option<PathBuf> {
+    let folder = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    Some(folder.canonicalize().ok()?.join(path.file_name()?))
+}
+
+/// An output path that is an existing folder, or ends with a separator as folder names do.
+fn names_a_folder(path: &Path) -> bool {
+    path.is_dir() || path.as_os_str().to_string_lossy().ends_with(std::path::is_separator)
 }
 
 /// `batch FILE [--backend B]`.
@@ -299,6 +387,13 @@ impl Values<'_> {
 
     fn image_path(&mut self, flag: &str) -> Result<PathBuf, UsageError> {
         let path = self.path(flag)?;
+        if names_a_folder(&path) {
+            return Err(UsageError(format!(
+                "{flag} {}: names a folder; give an image file name, such as {}",
+                path.display(),
+                path.join("image.tga").display()
+            )));
+        }
         if ImageFormat::from_path(&path).is_none() {
             return Err(UsageError(format!("{flag} {}: unsupported image format, use .tga or .png", path.display())));
         }
@@ -342,6 +437,21 @@ impl Values<'_> {
             return Err(UsageError(format!("{flag}: MIN ({min}) must be less than MAX ({max})")));
         }
         Ok(DepthArgs { min, max, path })
+    }
+
+    /// `--outputs color,normals,depth`: a comma-separated list (`colour` is also accepted).
+    fn outputs(&mut self, flag: &str) -> Result<Outputs, UsageError> {
+        let value = self.take(flag, "a list such as color,normals,depth")?;
+        let mut outputs = Outputs::default();
+        for name in value.to_string_lossy().split(',') {
+            match name {
+                "color" | "colour" => outputs.color = true,
+                "normals" => outputs.normals = true,
+                "depth" => outputs.depth = true,
+                _ => return Err(UsageError(format!("{flag}: '{name}' is not one of color, normals, depth"))),
+            }
+        }
+        Ok(outputs)
     }
 
     fn backend(&mut self, flag: &str) -> Result<BackendChoice, UsageError> {
@@ -409,9 +519,10 @@ mod tests {
         let default = render("-input s -size 1 1 -output o.tga");
         assert_eq!((default.triangle_test, default.sphere_test), (TriangleTest::Watertight, SphereTest::Robust));
         match parse("compare -input s -size 1 1 -normals n.tga --max-diff-pixels 7") {
-            Ok(Command::Compare { args, max_diff_pixels }) => {
+            Ok(Command::Compare { args, outputs, max_diff_pixels }) => {
                 assert_eq!(max_diff_pixels, Some(7));
                 assert_eq!(args.normals, Some(PathBuf::from("n.tga")));
+                assert_eq!(outputs, Outputs { normals: true, ..Outputs::default() });
             }
             other => panic!("{other:?}"),
         }
@@ -421,6 +532,40 @@ mod tests {
             .unwrap_err()
             .0
             .contains("cramer, moller, watertight"));
+    }
+
+    /// `compare` takes `--outputs` instead of file names (or both), and refuses `--backend`.
+    #[test]
+    fn compare_outputs() {
+        match parse("compare -input s -size 2 2 --outputs depth,colour -normals n.tga") {
+            Ok(Command::Compare { args, outputs, max_diff_pixels: None }) => {
+                assert_eq!(outputs, Outputs { color: true, normals: true, depth: true });
+                assert_eq!((args.output, args.depth), (None, None));
+            }
+            other => panic!("{other:?}"),
+        }
+        let cases = [
+            ("compare -input s -size 2 2 --outputs color --backend gpu", "compare: --backend does not apply"),
+            ("compare -input s -size 2 2 --outputs color --outputs depth", "--outputs is given twice"),
+            ("compare -input s -size 2 2 --outputs color,", "--outputs: '' is not one of"),
+            ("compare -input s -size 2 2", "nothing to compare"),
+            ("-input s -size 2 2 --outputs color", "unknown flag '--outputs'"),
+        ];
+        for (line, needle) in cases {
+            assert!(parse(line).expect_err(line).0.contains(needle), "{line}: {:?}", parse(line));
+        }
+    }
+
+    /// Two outputs naming one file are refused, however the name is spelled; compare writes
+    /// no file, so it does not mind.
+    #[test]
+    fn outputs_must_name_distinct_files() {
+        let err = parse("-input s -size 1 1 -normals a.tga -depth 0 1 ./a.tga").unwrap_err();
+        assert_eq!(err.0, "-normals a.tga and -depth ./a.tga name the same file: one image would replace the other");
+        // Unit tests run in the package root, which has a src folder.
+        assert!(parse("-input s -size 1 1 -output a.tga -normals src/../a.tga").unwrap_err().0.contains("same file"));
+        assert!(parse("-input s -size 1 1 -output a.tga -normals b.tga -depth 0 1 c.png").is_ok());
+        assert!(parse("compare -input s -size 1 1 -output a.tga -normals a.tga").is_ok());
     }
 
     #[test]

@@ -1,11 +1,13 @@
 //! One command line's work: read the scene, render, write the requested images.
 
 use crate::app::backend::Backend;
-use crate::app::cli::RenderArgs;
+use crate::app::cli::{Outputs, RenderArgs};
 use raycaster::gpu::GpuError;
 use raycaster::image_io::{self, ImageError, ImageFile};
+use raycaster::metrics::OutputErrors;
 use raycaster::render::RenderOptions;
-use raycaster::scene::{self, Scene, SceneError};
+use raycaster::scene::{self, Scene, SceneError, SceneWarning};
+use std::fmt;
 
 /// Anything that can stop a render.
 #[derive(Debug, thiserror::Error)]
@@ -34,7 +36,7 @@ pub fn options_for(args: &RenderArgs) -> RenderOptions {
 
 /// Loads `args.input`, renders it with `backend` and writes every requested image (all of
 /// them or, on failure, none). Returns the scene's warnings.
-pub fn run(args: &RenderArgs, backend: &Backend) -> Result<Vec<String>, Error> {
+pub fn run(args: &RenderArgs, backend: &Backend) -> Result<Vec<SceneWarning>, Error> {
     let scene = scene::load_scene(&args.input)?;
     render_scene(&scene, args, backend)?;
     Ok(scene.warnings)
@@ -65,24 +67,52 @@ pub fn render_scene(scene: &Scene, args: &RenderArgs, backend: &Backend) -> Resu
 /// What `raycaster compare` found: the GPU against the reference, per output.
 #[derive(Clone, Debug)]
 pub struct Comparison {
-    pub errors: Vec<raycaster::metrics::OutputErrors>,
-    pub warnings: Vec<String>,
+    pub errors: Vec<OutputErrors>,
+    pub warnings: Vec<SceneWarning>,
 }
 
+/// The parity contract's default limit: an output may have 0.1 % of its pixels (1 in 1000)
+/// more than 1 level off the reference.
+pub const DEFAULT_LIMIT_PER_MILLE: u64 = 1;
+
 impl Comparison {
-    /// Whether the GPU's result passes: no NaN or infinity anywhere, and no output with
-    /// more than `max_diff_pixels` pixels off by more than 1 level (when a limit is given).
-    pub fn passes(&self, max_diff_pixels: Option<u64>) -> bool {
-        self.errors
-            .iter()
-            .all(|e| e.non_finite == 0 && max_diff_pixels.is_none_or(|n| e.image.off_by_more_than_one as u64 <= n))
+    /// The parity contract: no NaN or infinity in any output, and no output with more than
+    /// `max_diff_pixels` (by default 0.1 % of its pixels) more than 1 level off. The error
+    /// names each output that fails and the limit it broke.
+    pub fn verdict(&self, max_diff_pixels: Option<u64>) -> Result<(), String> {
+        let failures: Vec<String> = self.errors.iter().filter_map(|e| output_failure(e, max_diff_pixels)).collect();
+        if failures.is_empty() {
+            Ok(())
+        } else {
+            Err(format!("compare: {}", failures.join("; ")))
+        }
     }
 }
 
-/// Renders what `args` names with the GPU and with the f64 reference, writing no file.
-pub fn compare(args: &RenderArgs, gpu: &raycaster::gpu::GpuRenderer) -> Result<Comparison, Error> {
+/// Why one output breaks the parity contract, if it does.
+fn output_failure(errors: &OutputErrors, max_diff_pixels: Option<u64>) -> Option<String> {
+    let name = errors.output.name();
+    if errors.non_finite > 0 {
+        return Some(format!("{name}: {} NaN or infinite values from the GPU (limit 0)", errors.non_finite));
+    }
+    let pixels = errors.image.pixels as u64;
+    let (limit, origin) = match max_diff_pixels {
+        Some(n) => (n, "--max-diff-pixels"),
+        None => (pixels * DEFAULT_LIMIT_PER_MILLE / 1000, "0.1 %"),
+    };
+    let off = errors.image.off_by_more_than_one as u64;
+    (off > limit).then(|| {
+        format!(
+            "{name}: {off} of {pixels} pixels are more than 1 level off the reference; the limit is {limit} ({origin})"
+        )
+    })
+}
+
+/// Renders the `outputs` with the GPU and with the f64 reference, writing no file.
+pub fn compare(args: &RenderArgs, outputs: Outputs, gpu: &raycaster::gpu::GpuRenderer) -> Result<Comparison, Error> {
     let scene = scene::load_scene(&args.input)?;
-    let options = options_for(args);
+    let options =
+        RenderOptions { color: outputs.color, normals: outputs.normals, depth: outputs.depth, ..options_for(args) };
     let ours = gpu.render(&scene, &options)?;
     let reference = raycaster::cpu::render(&scene, &options);
     let depth_range = match &args.depth {
@@ -95,34 +125,103 @@ pub fn compare(args: &RenderArgs, gpu: &raycaster::gpu::GpuRenderer) -> Result<C
     })
 }
 
-/// One failed line of a batch.
+/// What a line of a batch reports besides its images.
 #[derive(Debug)]
-pub struct BatchFailure {
-    pub line: usize,
-    pub message: String,
+pub enum LineReport {
+    Warning(SceneWarning),
+    Failure(String),
 }
 
-/// Runs each render command line of `text` with `backend`.
-/// Returns the warnings printed along the way and the lines that failed; a failing line
-/// does not stop the others.
-pub fn run_batch(text: &str, backend: &Backend) -> (Vec<String>, Vec<BatchFailure>) {
-    let mut warnings = Vec::new();
-    let mut failures = Vec::new();
+impl fmt::Display for LineReport {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            LineReport::Warning(w) => w.fmt(f),
+            LineReport::Failure(message) => f.write_str(message),
+        }
+    }
+}
+
+/// How many command lines a batch ran, and how many of them failed.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct BatchCount {
+    pub run: usize,
+    pub failed: usize,
+}
+
+/// Runs each render command line of `text` with `backend`, handing every warning and
+/// failure to `report` with its line number as it happens. A failing line does not stop
+/// the others.
+pub fn run_batch(text: &str, backend: &Backend, mut report: impl FnMut(usize, LineReport)) -> BatchCount {
+    let mut count = BatchCount::default();
     for (index, line) in text.lines().enumerate() {
         let line_number = index + 1;
         let words: Vec<&str> = line.split_whitespace().collect();
         if words.is_empty() || words[0].starts_with('#') {
             continue;
         }
-        let fail = |message: String| BatchFailure { line: line_number, message };
-        match crate::app::cli::parse_args(&words) {
+        count.run += 1;
+        let failure = match crate::app::cli::parse_args(&words) {
             Ok(crate::app::cli::Command::Render(args)) => match run(&args, backend) {
-                Ok(w) => warnings.extend(w),
-                Err(e) => failures.push(fail(e.to_string())),
+                Ok(warnings) => {
+                    warnings.into_iter().for_each(|w| report(line_number, LineReport::Warning(w)));
+                    continue;
+                }
+                Err(e) => e.to_string(),
             },
-            Ok(_) => failures.push(fail("only render command lines can be batched".into())),
-            Err(e) => failures.push(fail(e.0)),
+            Ok(_) => "only render command lines can be batched".into(),
+            Err(e) => e.0,
+        };
+        count.failed += 1;
+        report(line_number, LineReport::Failure(failure));
+    }
+    count
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use raycaster::metrics::{ImageDiff, Output};
+
+    fn errors(output: Output, pixels: usize, off: usize, non_finite: usize) -> OutputErrors {
+        OutputErrors {
+            output,
+            image: ImageDiff { pixels, off_by_more_than_one: off, max: 2, mean: 0.0 },
+            hit_mismatches: 0,
+            float_max: 0.0,
+            float_mean: 0.0,
+            relative_max: None,
+            non_finite,
         }
     }
-    (warnings, failures)
+
+    fn verdict(outputs: Vec<OutputErrors>, max_diff_pixels: Option<u64>) -> Result<(), String> {
+        Comparison { errors: outputs, warnings: Vec::new() }.verdict(max_diff_pixels)
+    }
+
+    /// 0.1 % of 10000 pixels is 10: 10 off passes, 11 fails; 1999 pixels allow 1.
+    #[test]
+    fn the_default_limit_is_a_tenth_of_a_percent() {
+        assert_eq!(verdict(vec![errors(Output::Color, 10_000, 10, 0)], None), Ok(()));
+        assert_eq!(
+            verdict(vec![errors(Output::Color, 10_000, 11, 0), errors(Output::Depth, 1999, 2, 0)], None),
+            Err("compare: colour: 11 of 10000 pixels are more than 1 level off the reference; the limit is 10 \
+                 (0.1 %); depth: 2 of 1999 pixels are more than 1 level off the reference; the limit is 1 (0.1 %)"
+                .into())
+        );
+    }
+
+    #[test]
+    fn max_diff_pixels_overrides_and_nan_always_fails() {
+        assert_eq!(verdict(vec![errors(Output::Normals, 100, 100, 0)], Some(100)), Ok(()));
+        assert_eq!(
+            verdict(vec![errors(Output::Normals, 100, 4, 0)], Some(3)),
+            Err("compare: normals: 4 of 100 pixels are more than 1 level off the reference; the limit is 3 \
+                 (--max-diff-pixels)"
+                .into())
+        );
+        assert_eq!(
+            verdict(vec![errors(Output::Depth, 100, 0, 1)], Some(100)),
+            Err("compare: depth: 1 NaN or infinite values from the GPU (limit 0)".into())
+        );
+    }
 }

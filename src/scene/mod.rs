@@ -11,7 +11,7 @@ pub mod model;
 mod obj;
 mod parser;
 
-pub use error::SceneError;
+pub use error::{SceneError, SceneWarning};
 pub use model::*;
 pub use obj::{load_obj, parse_obj};
 pub use parser::{load_scene, parse_scene, MAX_NESTING};

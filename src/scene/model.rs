@@ -27,7 +27,7 @@ pub struct Scene {
     /// The top-level `Group`.
     pub root: Vec<Object>,
     /// Non-fatal remarks made while reading (no lights, PhongMaterial terms ignored, ...).
-    pub warnings: Vec<String>,
+    pub warnings: Vec<super::SceneWarning>,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]

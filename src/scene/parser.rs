@@ -7,7 +7,7 @@
 //! only checks deferred to the end are those that need a block written later in the file
 //! (material indices used before the `Materials` block).
 
-use super::error::SceneError;
+use super::error::{SceneError, SceneWarning};
 use super::lexer::{describe, parse_count, parse_decimal, read_source, Lexer, Token};
 use super::model::{Background, Camera, DirectionalLight, Location, Material, Mesh, Object, Projection, Scene, Shape};
 use super::obj::load_obj;
@@ -160,7 +160,7 @@ struct Parser<'a> {
     unchecked_material_refs: Vec<(u32, Location)>,
     /// Loaded meshes by canonical path, so a mesh used twice is shared.
     meshes: HashMap<PathBuf, Arc<Mesh>>,
-    warnings: Vec<String>,
+    warnings: Vec<SceneWarning>,
 }
 
 impl<'a> Parser<'a> {
@@ -367,7 +367,9 @@ impl<'a> Parser<'a> {
         let mut background =
             blocks.background.unwrap_or(BackgroundBlock { background: Background::default(), ambient_given: false });
         if lights.is_empty() {
-            self.warnings.push(no_lights_warning(&background));
+            // At the empty Lights block if there is one; a file without one has no place to point at.
+            let lights_block = blocks.seen.iter().find(|(kind, _)| *kind == "Lights").map(|&(_, at)| at);
+            self.warnings.push(SceneWarning::new(self.path, lights_block, no_lights_warning(&background)));
             background.background.ambient = DVec3::ONE;
         }
         Ok(Scene {
@@ -539,8 +541,8 @@ impl<'a> Parser<'a> {
             }
             Ok(())
         })?;
-        if phong && !self.warnings.iter().any(|w| w == PHONG_WARNING) {
-            self.warnings.push(PHONG_WARNING.to_string());
+        if phong && !self.warnings.iter().any(|w| w.message == PHONG_WARNING) {
+            self.warnings.push(SceneWarning::new(self.path, Some(keyword.location), PHONG_WARNING));
         }
         Ok(Material { diffuse })
     }

@@ -1,0 +1,80 @@
+//! How the command ends. Every error reaches `main` as a [`Failure`], which carries its exit
+//! status, and is reported there in one place; the signal handler reports through the same
+//! function. Writing to a closed stdout or stderr (`raycaster --help | head -1`) is not an
+//! error: the text is dropped and the command goes on to its own verdict.
+
+use crate::app::cli::UsageError;
+use crate::app::job;
+use raycaster::gpu::GpuError;
+use std::io::Write;
+
+/// Why the command failed, with the exit status each reason gets.
+#[derive(Debug, thiserror::Error)]
+pub enum Failure {
+    /// A bad command line: status 2, and nothing was rendered.
+    #[error(transparent)]
+    Usage(#[from] UsageError),
+    /// A scene, GPU or image file error: status 1.
+    #[error(transparent)]
+    Job(#[from] job::Error),
+    /// Anything else that failed (compare's verdict, lines of a batch, the bench): status 1.
+    #[error("{0}")]
+    Failed(String),
+    /// Interrupted by a signal (SIGINT, SIGTERM, SIGHUP): status 128 + its number, the
+    /// shells' convention.
+    #[error("interrupted by {}", signal_name(*.0))]
+    Signal(i32),
+}
+
+impl From<GpuError> for Failure {
+    fn from(e: GpuError) -> Self {
+        Failure::Job(e.into())
+    }
+}
+
+impl Failure {
+    pub fn status(&self) -> u8 {
+        match self {
+            Failure::Usage(_) => 2,
+            Failure::Job(_) | Failure::Failed(_) => 1,
+            Failure::Signal(signal) => u8::try_from(128 + signal).unwrap_or(u8::MAX),
+        }
+    }
+}
+
+/// Prints `raycaster: FAILURE` on stderr and returns the exit status.
+pub fn report(failure: &Failure) -> u8 {
+    say(&failure.to_string());
+    failure.status()
+}
+
+/// One line on stderr, `raycaster: ` first.
+pub fn say(line: &str) {
+    note(&format!("raycaster: {line}"));
+}
+
+/// One line on stderr as it is (progress). A closed stderr is ignored: there is no one left
+/// to tell.
+pub fn note(line: &str) {
+    let _ = writeln!(std::io::stderr().lock(), "{line}");
+}
+
+/// Text on stdout. A reader that has gone away (a closed pipe) drops the rest quietly; any
+/// other write error (a full disk) is a failure.
+pub fn print(text: &str) -> Result<(), Failure> {
+    let mut out = std::io::stdout().lock();
+    match out.write_all(text.as_bytes()).and_then(|()| out.flush()) {
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => Err(Failure::Failed(format!("stdout: {e}"))),
+        _ => Ok(()),
+    }
+}
+
+fn signal_name(signal: i32) -> String {
+    use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
+    match signal {
+        SIGINT => "SIGINT".into(),
+        SIGTERM => "SIGTERM".into(),
+        SIGHUP => "SIGHUP".into(),
+        other => format!("signal {other}"),
+    }
+}
