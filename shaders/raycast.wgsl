@@ -417,10 +417,10 @@ fn closest_hit(ray: Ray, bin: u32) -> Closest {
             }
         }
     }
-    // Only the watertight test reads the shear; otherwise the compiler drops it.
+    // Only the watertight test outside bins reads the shear; otherwise the compiler drops it.
     let shear = shear_for(ray.direction);
     if (USE_BINS) {
-        return walk_bin(bin, ray, tmin, best);
+        return walk_bin(bin, ray, shear, tmin, best);
     }
     if (USE_BVH) {
         return traverse(ray, shear, tmin, best);
@@ -597,16 +597,25 @@ fn try_eye_triangle(k: u32, ray: Ray, tmin: f32, best: Closest) -> Closest {
     return best;
 }
 
-fn try_binned(r: u32, ray: Ray, tmin: f32, best: Closest) -> Closest {
+// With bins, the watertight test takes its primary-ray form (the same guarantee, from
+// planes computed once per frame); the other tests stay as they are, to be compared.
+fn try_binned_triangle(k: u32, ray: Ray, shear: Shear, tmin: f32, best: Closest) -> Closest {
+    if (TRIANGLE_TEST == TRIANGLE_WATERTIGHT) {
+        return try_eye_triangle(k, ray, tmin, best);
+    }
+    return try_triangle(k, ray, shear, tmin, best);
+}
+
+fn try_binned(r: u32, ray: Ray, shear: Shear, tmin: f32, best: Closest) -> Closest {
     // Triangles alone: the reference is the index (REF_TRIANGLE is 0).
     if (!HAS_SPHERES && !HAS_ELLIPSOIDS) {
-        return try_eye_triangle(r, ray, tmin, best);
+        return try_binned_triangle(r, ray, shear, tmin, best);
     }
     let kind = r >> 30u;
     let index = r & REF_INDEX_MASK;
     var out = best;
     if (HAS_TRIANGLES && kind == REF_TRIANGLE) {
-        out = try_eye_triangle(index, ray, tmin, out);
+        out = try_binned_triangle(index, ray, shear, tmin, out);
     }
     if (HAS_SPHERES && kind == REF_SPHERE) {
         out = try_sphere(index, ray, tmin, out);
@@ -620,7 +629,7 @@ fn try_binned(r: u32, ray: Ray, tmin: f32, best: Closest) -> Closest {
 // The closest hit among the primitives listed in this pixel's bin, nearest first: a ray
 // stops once its closest hit is nearer than the next item can be. The list, and so the
 // loop, is the same for every invocation of the workgroup.
-fn walk_bin(bin: u32, ray: Ray, tmin: f32, start: Closest) -> Closest {
+fn walk_bin(bin: u32, ray: Ray, shear: Shear, tmin: f32, start: Closest) -> Closest {
     var best = start;
     let range = bin_ranges[bin];
     for (var k = range.x; k < range.x + range.y; k++) {
@@ -628,7 +637,7 @@ fn walk_bin(bin: u32, ray: Ray, tmin: f32, start: Closest) -> Closest {
         if (item.near > best.t) {
             break;
         }
-        best = try_binned(item.reference, ray, tmin, best);
+        best = try_binned(item.reference, ray, shear, tmin, best);
     }
     return best;
 }

@@ -100,6 +100,17 @@ impl SceneBuffers {
         buffers
     }
 
+    /// What the kernel walks to find candidates.
+    pub fn acceleration(&self) -> Acceleration {
+        if self.bins.is_some() {
+            Acceleration::Bins
+        } else if self.bvh.is_some() {
+            Acceleration::Hierarchy
+        } else {
+            Acceleration::Flat
+        }
+    }
+
     /// Bins, a hierarchy or flat loops: what `options` asks for, or with
     /// [`Acceleration::Auto`] the cost model's choice.
     fn choose_acceleration(&mut self, rays: &PrimaryRays, options: &GpuOptions) {

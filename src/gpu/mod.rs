@@ -71,6 +71,17 @@ pub enum Acceleration {
     Flat,
 }
 
+impl Acceleration {
+    pub fn name(self) -> &'static str {
+        match self {
+            Acceleration::Auto => "auto",
+            Acceleration::Bins => "bins",
+            Acceleration::Hierarchy => "hierarchy",
+            Acceleration::Flat => "flat",
+        }
+    }
+}
+
 #[derive(Debug, thiserror::Error)]
 pub enum GpuError {
     #[error("no GPU adapter found ({0}); on a machine without a GPU install Mesa's lavapipe (apt-get install mesa-vulkan-drivers) or use --backend cpu")]
@@ -200,12 +211,14 @@ pub struct RenderStats {
     pub kernel_ns: Option<u64>,
     /// Dispatches the image took.
     pub tiles: u32,
-    /// Time to build the hierarchy on the CPU, when the scene got one.
+    /// Time to build the hierarchy or the bins on the CPU, when the scene got one.
     pub bvh_build_ms: Option<f64>,
     /// Time to flatten the scene into buffers (BVH build included) and upload them.
     pub prepare_ms: f64,
-    /// Bytes of scene data uploaded (primitives, materials, lights, hierarchy).
+    /// Bytes of scene data uploaded (primitives, materials, lights, hierarchy, bins).
     pub scene_bytes: u64,
+    /// How the kernel found candidates (never `Auto`: what the cost model chose).
+    pub acceleration: Acceleration,
 }
 
 impl GpuRenderer {

@@ -79,6 +79,7 @@ impl<'a> PreparedScene<'a> {
                 bvh_build_ms: buffers.bvh.as_ref().map(|b| b.build_ms).or(buffers.bins.as_ref().map(|b| b.build_ms)),
                 prepare_ms: start.elapsed().as_secs_f64() * 1e3,
                 scene_bytes,
+                acceleration: buffers.acceleration(),
             },
         })
     }
