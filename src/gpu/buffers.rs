@@ -9,8 +9,8 @@
 
 use crate::bvh::{Aabb, Bvh, BvhNode};
 use crate::camera::PrimaryRays;
-use crate::render::{Frame, RenderOptions};
-use crate::scene::{Object, Scene, Shape};
+use crate::render::{Frame, Pixel, RenderOptions};
+use crate::scene::{ellipsoid_extent, Object, Scene, Shape};
 use bytemuck::{Pod, Zeroable};
 use glam::{DMat3, DMat4, DVec3, Vec3};
 use std::time::Instant;
@@ -107,24 +107,24 @@ impl PixelLayout {
 
     /// The frame of `rows` full rows that `words` (one tile, as read back) encode.
     pub fn decode(&self, options: &RenderOptions, rows: u32, words: &[u32]) -> Frame {
-        let mut frame = Frame::new(&RenderOptions { height: rows, ..*options });
         let f = |w: &[u32]| [f32::from_bits(w[0]), f32::from_bits(w[1]), f32::from_bits(w[2])];
-        for (k, pixel) in words.chunks_exact(self.words() as usize).enumerate() {
-            frame.hit[k] = pixel[0] != 0;
+        let pixels = words.chunks_exact(self.words() as usize).map(|words| {
+            let mut pixel = Pixel { hit: words[0] != 0, ..Pixel::default() };
             let mut w = 1;
             if self.color {
-                frame.color[k] = f(&pixel[w..]);
+                pixel.color = f(&words[w..]);
                 w += 3;
             }
             if self.normal {
-                frame.normal[k] = f(&pixel[w..]);
+                pixel.normal = f(&words[w..]);
                 w += 3;
             }
             if self.depth {
-                frame.depth[k] = f32::from_bits(pixel[w]);
+                pixel.depth = f32::from_bits(words[w]);
             }
-        }
-        frame
+            pixel
+        });
+        Frame::from_pixels(&RenderOptions { height: rows, ..*options }, pixels)
     }
 }
 
@@ -277,9 +277,8 @@ impl SceneBuffers {
         // the kernel needs the inverse of that.
         let to_world = *matrix * DMat4::from_translation(center) * DMat4::from_scale(DVec3::splat(radius));
         let to_unit = to_world.inverse();
-        // The image of the unit sphere under A reaches |row i of A's linear part| along axis i.
-        let half = DVec3::from_array([0, 1, 2].map(|r| to_world.row(r).truncate().length()));
-        self.ellipsoid_bounds.push(padded_box(to_world.w_axis.truncate(), half));
+        let (center, half) = ellipsoid_extent(&to_world);
+        self.ellipsoid_bounds.push(padded_box(center, half));
         let rows = [0, 1, 2].map(|r| to_unit.row(r).as_vec4().to_array());
         self.ellipsoids.push(GpuEllipsoid { rows, material, ..Default::default() });
     }
@@ -298,7 +297,7 @@ impl SceneBuffers {
     }
 
     /// A mirroring transform (det < 0) reverses the winding of mapped vertices, while the
-    /// SPEC's normal `normalise(M⁻ᵀ·n)` does not flip; swapping two vertices keeps them equal.
+    /// normal of docs/SPEC.md §4, `normalise(M⁻ᵀ·n)`, does not flip; swapping two vertices keeps them equal.
     fn push_triangle(&mut self, matrix: &DMat4, vertices: &[DVec3; 3], material: u32) {
         let [a, mut b, mut c] = vertices.map(|v| f32x3(matrix.transform_point3(v)));
         if DMat3::from_mat4(*matrix).determinant() < 0.0 {

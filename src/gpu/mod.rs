@@ -147,7 +147,7 @@ impl GpuRenderer {
             })
             .await
             .map_err(|e| GpuError::NoAdapter(e.to_string()))?;
-        // The defaults are below what lavapipe and real GPUs offer (MEASURED.md); ask for all.
+        // The defaults are below what lavapipe and real GPUs offer (docs/lavapipe.md); ask for all.
         let limits = adapter.limits();
         // Kernel time from the GPU's own clock where the adapter offers it (lavapipe does).
         let features = adapter.features() & wgpu::Features::TIMESTAMP_QUERY;
@@ -224,8 +224,7 @@ impl GpuRenderer {
         mut on_tile: impl FnMut(u32, Frame) -> Result<(), E>,
     ) -> Result<RenderStats, E> {
         let start = std::time::Instant::now();
-        let rays = PrimaryRays::new(&scene.camera, options.width, options.height)
-            .expect("the parser rejects cameras whose up is parallel to their direction");
+        let rays = PrimaryRays::for_camera(&scene.camera, options.width, options.height);
         let buffers = SceneBuffers::new(scene, &rays, self.bvh_min_primitives);
         let pipeline = self.pipeline(KernelConfig::new(&buffers, options));
         let inputs = self.upload(&buffers)?;
