@@ -1,12 +1,12 @@
 // One invocation per pixel: cast the primary ray, keep the closest hit, then write colour,
-// normal and depth (SPEC §3–§5).
+// normal and depth (docs/SPEC.md §3–§5).
 //
 // Coordinates are camera-relative: the host moved the scene so that the camera centre is
 // the origin (in f64, before rounding to f32), so precision does not depend on where the
 // scene sits in the world.
 //
 // Feature switches are `override` constants, not run-time flags: on lavapipe every branch
-// runs whether taken or not (MEASURED.md), while an override set to false removes its code.
+// runs whether taken or not (docs/lavapipe.md), while an override set to false removes its code.
 
 override HAS_SPHERES: bool = true;
 override HAS_ELLIPSOIDS: bool = true;
@@ -52,7 +52,7 @@ const KIND_PLANE: u32 = 3u;
 const KIND_TRIANGLE: u32 = 4u;
 
 struct Params {
-    // The camera (SPEC §3), its extent folded into `horizontal` and `up`; for a
+    // The camera (docs/SPEC.md §3), its extent folded into `horizontal` and `up`; for a
     // perspective camera `direction` is scaled by D = 1/tan(angle/2).
     direction: vec3<f32>,
     width: u32,
@@ -104,7 +104,7 @@ struct Plane {
     _pad2: u32,
 }
 
-// Vertices in world space, ordered so that (v1 − v0) × (v2 − v0) is the SPEC's normal.
+// Vertices in world space, ordered so that (v1 − v0) × (v2 − v0) is the normal of docs/SPEC.md §4.
 struct Triangle {
     v0: vec3<f32>,
     material: u32,
@@ -181,7 +181,7 @@ struct Ray {
 }
 
 // Pixel (i from the left, j from the bottom), sampled at its centre; the longer image side
-// spans the camera's extent and the shorter one is cropped (SPEC §3).
+// spans the camera's extent and the shorter one is cropped (docs/SPEC.md §3).
 fn primary_ray(i: u32, j: u32) -> Ray {
     let longer = f32(max(params.width, params.height));
     let x = (f32(i) + 0.5 - 0.5 * f32(params.width)) / longer;
@@ -263,7 +263,7 @@ fn to_unit_sphere_vector(e: Ellipsoid, v: vec3<f32>) -> vec3<f32> {
     return vec3<f32>(dot(e.row0.xyz, v), dot(e.row1.xyz, v), dot(e.row2.xyz, v));
 }
 
-// SPEC §4: the ray goes into object space without renormalising, so t is the world t.
+// docs/SPEC.md §4: the ray goes into object space without renormalising, so t is the world t.
 fn ellipsoid_t(e: Ellipsoid, ray: Ray, tmin: f32) -> f32 {
     return sphere_t(to_unit_sphere_point(e, ray.origin), to_unit_sphere_vector(e, ray.direction), 1.0, tmin);
 }
@@ -668,7 +668,7 @@ fn surface_at(hit: Closest, ray: Ray) -> Surface {
     return Surface(vec3<f32>(0.0), 0u);
 }
 
-// SPEC §5: ambient plus Lambert per light; a back-facing hit is black unless SHADE_BACK,
+// docs/SPEC.md §5: ambient plus Lambert per light; a back-facing hit is black unless SHADE_BACK,
 // which shades it with the flipped normal.
 fn shade(surface: Surface, ray: Ray) -> vec3<f32> {
     var n = surface.normal;

@@ -1,4 +1,4 @@
-//! From float frames to 8-bit images (SPEC §5), and image files written atomically.
+//! From float frames to 8-bit images (docs/SPEC.md §5), and image files written atomically.
 //!
 //! Every channel is clamped to [0, 1] and stored as `floor(255·v)`: truncation, as the
 //! course's own images are made.
@@ -13,7 +13,7 @@ use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 use std::sync::{Mutex, MutexGuard, PoisonError};
 
-/// SPEC §5: `floor(255·clamp(v, 0, 1))`. NaN becomes 0.
+/// docs/SPEC.md §5: `floor(255·clamp(v, 0, 1))`. NaN becomes 0.
 pub fn quantize(v: f32) -> u8 {
     if v.is_nan() {
         return 0;

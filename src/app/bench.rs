@@ -11,8 +11,10 @@ use glam::DVec3;
 use raycaster::cpu::Reference;
 use raycaster::gpu::{Acceleration, GpuError, GpuOptions, GpuRenderer};
 use raycaster::metrics::{compare_frames, depth_range_of, Output, OutputErrors};
-use raycaster::render::{Frame, RenderOptions, TriangleTest};
-use raycaster::scene::{self, Background, Camera, DirectionalLight, Material, Mesh, Object, Projection, Scene, Shape};
+use raycaster::render::{Frame, Pixel, RenderOptions, TriangleTest};
+use raycaster::scene::{
+    self, Background, Bounds, Camera, DirectionalLight, Material, Mesh, Object, Projection, Scene, Shape,
+};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -172,10 +174,7 @@ struct Sampler {
 
 struct Sample {
     position: (u32, u32),
-    hit: bool,
-    color: [f32; 3],
-    normal: [f32; 3],
-    depth: f32,
+    pixel: Pixel,
 }
 
 impl Sampler {
@@ -197,25 +196,18 @@ impl Sampler {
             }
             for i in (0..self.width).filter(|&i| self.picks(i)) {
                 let k = (r * self.width + i) as usize;
-                into.push(Sample {
-                    position: (i, row),
-                    hit: tile.hit[k],
-                    color: tile.color[k],
-                    normal: tile.normal[k],
-                    depth: tile.depth[k],
-                });
+                into.push(Sample { position: (i, row), pixel: tile.pixel(k) });
             }
         }
     }
 }
 
+/// The samples as a one-row frame, in their order.
 fn samples_frame(options: &RenderOptions, samples: &[Sample]) -> Frame {
-    let mut frame = Frame::new(&RenderOptions { width: samples.len() as u32, height: 1, ..*options });
-    frame.hit = samples.iter().map(|s| s.hit).collect();
-    frame.color = samples.iter().map(|s| s.color).collect();
-    frame.normal = samples.iter().map(|s| s.normal).collect();
-    frame.depth = samples.iter().map(|s| s.depth).collect();
-    frame
+    Frame::from_pixels(
+        &RenderOptions { width: samples.len() as u32, height: 1, ..*options },
+        samples.iter().map(|s| s.pixel),
+    )
 }
 
 fn median(values: &mut [f64]) -> f64 {
@@ -245,20 +237,20 @@ fn peak_memory_mib() -> f64 {
 /// A scene that frames `mesh`: a perspective camera in front of its bounding box (+z side),
 /// one white light from the upper left, grey material.
 pub fn mesh_scene(name: &str, mesh: Mesh) -> Scene {
-    let lo = mesh.positions.iter().fold(DVec3::INFINITY, |a, &p| a.min(p));
-    let hi = mesh.positions.iter().fold(DVec3::NEG_INFINITY, |a, &p| a.max(p));
+    let Bounds { min: lo, max: hi } = mesh.bounds();
     let (center, radius) = ((lo + hi) / 2.0, ((hi - lo).length() / 2.0).max(1e-9));
     let angle: f64 = 40f64.to_radians();
     let distance = radius / (angle / 2.0).sin();
     Scene {
         path: PathBuf::from(name),
-        camera: Camera {
-            projection: Projection::Perspective { angle },
-            center: center + DVec3::new(0.0, 0.0, distance),
-            direction: DVec3::new(0.0, 0.0, -1.0),
-            up: DVec3::Y,
-            location: Default::default(),
-        },
+        camera: Camera::new(
+            Projection::Perspective { angle },
+            center + DVec3::new(0.0, 0.0, distance),
+            DVec3::new(0.0, 0.0, -1.0),
+            DVec3::Y,
+            Default::default(),
+        )
+        .expect("up (+y) is orthogonal to direction (−z)"),
         lights: vec![DirectionalLight { direction: DVec3::new(-0.5, -0.5, -1.0), color: DVec3::splat(0.9) }],
         background: Background { color: DVec3::splat(0.2), ambient: DVec3::splat(0.1) },
         materials: vec![Material { diffuse: DVec3::splat(0.8) }],

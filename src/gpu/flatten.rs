@@ -11,7 +11,7 @@ use super::layout::*;
 use super::{Acceleration, GpuOptions};
 use crate::bvh::{Aabb, Bvh, BvhNode};
 use crate::camera::PrimaryRays;
-use crate::scene::{Object, Scene, Shape};
+use crate::scene::{ellipsoid_extent, Object, Scene, Shape};
 use glam::{DMat3, DMat4, DVec3, Vec3};
 use std::time::Instant;
 
@@ -198,9 +198,8 @@ impl SceneBuffers {
         // the kernel needs the inverse of that.
         let to_world = *matrix * DMat4::from_translation(center) * DMat4::from_scale(DVec3::splat(radius));
         let to_unit = to_world.inverse();
-        // The image of the unit sphere under A reaches |row i of A's linear part| along axis i.
-        let half = DVec3::from_array([0, 1, 2].map(|r| to_world.row(r).truncate().length()));
-        self.ellipsoid_bounds.push(padded_box(to_world.w_axis.truncate(), half));
+        let (center, half) = ellipsoid_extent(&to_world);
+        self.ellipsoid_bounds.push(padded_box(center, half));
         let rows = [0, 1, 2].map(|r| to_unit.row(r).as_vec4().to_array());
         self.ellipsoids.push(GpuEllipsoid { rows, material, ..Default::default() });
     }
@@ -219,7 +218,7 @@ impl SceneBuffers {
     }
 
     /// A mirroring transform (det < 0) reverses the winding of mapped vertices, while the
-    /// SPEC's normal `normalise(M⁻ᵀ·n)` does not flip; swapping two vertices keeps them equal.
+    /// normal of docs/SPEC.md §4, `normalise(M⁻ᵀ·n)`, does not flip; swapping two vertices keeps them equal.
     fn push_triangle(&mut self, matrix: &DMat4, vertices: &[DVec3; 3], material: u32) {
         let [a, mut b, mut c] = vertices.map(|v| f32x3(matrix.transform_point3(v)));
         if DMat3::from_mat4(*matrix).determinant() < 0.0 {

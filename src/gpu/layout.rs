@@ -2,7 +2,7 @@
 //! spelled out, with the same size and field offsets as naga reports for the WGSL side
 //! (checked by `tests/layout.rs`), and the per-pixel word layout of the kernel's output.
 
-use crate::render::{Frame, RenderOptions};
+use crate::render::{Frame, Pixel, RenderOptions};
 use bytemuck::{Pod, Zeroable};
 /// WGSL `Params`.
 #[repr(C)]
@@ -125,24 +125,24 @@ impl PixelLayout {
 
     /// The frame of `rows` full rows that `words` (one tile, as read back) encode.
     pub fn decode(&self, options: &RenderOptions, rows: u32, words: &[u32]) -> Frame {
-        let mut frame = Frame::new(&RenderOptions { height: rows, ..*options });
         let f = |w: &[u32]| [f32::from_bits(w[0]), f32::from_bits(w[1]), f32::from_bits(w[2])];
-        for (k, pixel) in words.chunks_exact(self.words() as usize).enumerate() {
-            frame.hit[k] = pixel[0] != 0;
+        let pixels = words.chunks_exact(self.words() as usize).map(|words| {
+            let mut pixel = Pixel { hit: words[0] != 0, ..Pixel::default() };
             let mut w = 1;
             if self.color {
-                frame.color[k] = f(&pixel[w..]);
+                pixel.color = f(&words[w..]);
                 w += 3;
             }
             if self.normal {
-                frame.normal[k] = f(&pixel[w..]);
+                pixel.normal = f(&words[w..]);
                 w += 3;
             }
             if self.depth {
-                frame.depth[k] = f32::from_bits(pixel[w]);
+                pixel.depth = f32::from_bits(words[w]);
             }
-        }
-        frame
+            pixel
+        });
+        Frame::from_pixels(&RenderOptions { height: rows, ..*options }, pixels)
     }
 }
 

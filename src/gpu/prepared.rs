@@ -55,8 +55,7 @@ impl<'a> PreparedScene<'a> {
         layout: PixelLayout,
     ) -> Result<PreparedScene<'a>, GpuError> {
         let start = std::time::Instant::now();
-        let rays = crate::camera::PrimaryRays::new(&scene.camera, options.width, options.height)
-            .expect("the parser rejects cameras whose up is parallel to their direction");
+        let rays = crate::camera::PrimaryRays::for_camera(&scene.camera, options.width, options.height);
         let buffers = SceneBuffers::new(scene, &rays, &gpu.options);
         let pipeline = gpu.pipeline(KernelConfig::new(&buffers, layout, options));
         let inputs = upload_inputs(gpu, &buffers)?;
