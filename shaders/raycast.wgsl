@@ -40,6 +40,9 @@ const SPHERE_PRECISE: u32 = 1u;
 // (gpu::binning); else flat loops over each kind.
 override USE_BVH: bool = false;
 override USE_BINS: bool = false;
+override EXPERIMENT: u32 = 0u;
+override WORKGROUP_X: u32 = 8u;
+override WORKGROUP_Y: u32 = 8u;
 
 const F32_MAX: f32 = 3.40282347e38;
 // The "no hit" distance: never less than any closest-so-far.
@@ -150,6 +153,9 @@ struct BvhNode {
 
 
 @group(0) @binding(0) var<storage, read> params: Params;
+// The parameters, loaded once per invocation: lavapipe does not know that an address is the
+// same for every lane, so each read of the storage buffer would be a gather of its own.
+var<private> P: Params;
 @group(0) @binding(1) var<storage, read> spheres: array<Sphere>;
 @group(0) @binding(2) var<storage, read> ellipsoids: array<Ellipsoid>;
 @group(0) @binding(3) var<storage, read> planes: array<Plane>;
@@ -183,14 +189,14 @@ struct Ray {
 // Pixel (i from the left, j from the bottom), sampled at its centre; the longer image side
 // spans the camera's extent and the shorter one is cropped (docs/SPEC.md §3).
 fn primary_ray(i: u32, j: u32) -> Ray {
-    let longer = f32(max(params.width, params.height));
-    let x = (f32(i) + 0.5 - 0.5 * f32(params.width)) / longer;
-    let y = (f32(j) + 0.5 - 0.5 * f32(params.height)) / longer;
-    let offset = x * params.horizontal + y * params.up;
+    let longer = f32(max(P.width, P.height));
+    let x = (f32(i) + 0.5 - 0.5 * f32(P.width)) / longer;
+    let y = (f32(j) + 0.5 - 0.5 * f32(P.height)) / longer;
+    let offset = x * P.horizontal + y * P.up;
     if (ORTHOGRAPHIC) {
-        return Ray(offset, params.direction);
+        return Ray(offset, P.direction);
     }
-    return Ray(vec3<f32>(0.0), normalize(params.direction + offset));
+    return Ray(vec3<f32>(0.0), normalize(P.direction + offset));
 }
 
 // Rays of an orthographic camera start at infinity (negative t is visible); perspective
@@ -410,7 +416,7 @@ fn closest_hit(ray: Ray, bin: u32) -> Closest {
     var best = Closest(NO_HIT, KIND_NONE, 0u);
     // Planes first: infinite, outside the hierarchy, and a near plane hit prunes it.
     if (HAS_PLANES) {
-        for (var k = 0u; k < params.num_planes; k++) {
+        for (var k = 0u; k < P.num_planes; k++) {
             let t = plane_t(planes[k], ray, tmin);
             if (t < best.t) {
                 best = Closest(t, KIND_PLANE, k);
@@ -426,17 +432,17 @@ fn closest_hit(ray: Ray, bin: u32) -> Closest {
         return traverse(ray, shear, tmin, best);
     }
     if (HAS_SPHERES) {
-        for (var k = 0u; k < params.num_spheres; k++) {
+        for (var k = 0u; k < P.num_spheres; k++) {
             best = try_sphere(k, ray, tmin, best);
         }
     }
     if (HAS_ELLIPSOIDS) {
-        for (var k = 0u; k < params.num_ellipsoids; k++) {
+        for (var k = 0u; k < P.num_ellipsoids; k++) {
             best = try_ellipsoid(k, ray, tmin, best);
         }
     }
     if (HAS_TRIANGLES) {
-        for (var k = 0u; k < params.num_triangles; k++) {
+        for (var k = 0u; k < P.num_triangles; k++) {
             best = try_triangle(k, ray, shear, tmin, best);
         }
     }
@@ -632,8 +638,16 @@ fn try_binned(r: u32, ray: Ray, shear: Shear, tmin: f32, best: Closest) -> Close
 fn walk_bin(bin: u32, ray: Ray, shear: Shear, tmin: f32, start: Closest) -> Closest {
     var best = start;
     let range = bin_ranges[bin];
+    if (EXPERIMENT == 3u && range.y == 0u) {
+        return best;
+    }
     for (var k = range.x; k < range.x + range.y; k++) {
         let item = bin_items[k];
+        if (EXPERIMENT >= 2u) {
+            let candidate = try_binned(item.reference, ray, shear, tmin, best);
+            best = candidate;
+            continue;
+        }
         if (item.near > best.t) {
             break;
         }
@@ -679,7 +693,7 @@ fn shade(surface: Surface, ray: Ray) -> vec3<f32> {
         n = -n;
     }
     let diffuse = materials[surface.material].xyz;
-    var color = params.ambient * diffuse;
+    var color = P.ambient * diffuse;
     for (var k = 0u; k < NUM_LIGHTS; k++) {
         let light = lights[k];
         color += max(dot(light.to_light, n), 0.0) * light.color * diffuse;
@@ -737,21 +751,25 @@ fn write_pixel(index: u32, hit: bool, color: vec3<f32>, normal: vec3<f32>, t: f3
     }
 }
 
-@compute @workgroup_size(8, 8)
-fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+@compute @workgroup_size(WORKGROUP_X, WORKGROUP_Y)
+fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(workgroup_id) group: vec3<u32>) {
+    P = params;
     let i = id.x;
     let row = id.y;
-    if (i >= params.width || row >= params.tile_rows) {
+    var bin = ((P.first_row + row) / 8u) * P.bin_columns + i / 8u;
+    if (EXPERIMENT >= 1u) {
+        bin = (P.first_row / 8u + group.y) * P.bin_columns + group.x;
+    }
+    if (i >= P.width || row >= P.tile_rows) {
         return;
     }
     // Image rows count from the top, the camera's j from the bottom.
-    let j = params.height - 1u - (params.first_row + row);
+    let j = P.height - 1u - (P.first_row + row);
     let ray = primary_ray(i, j);
-    let image_row = params.first_row + row;
-    let hit = closest_hit(ray, (image_row / 8u) * params.bin_columns + i / 8u);
-    let index = row * params.width + i;
+    let hit = closest_hit(ray, bin);
+    let index = row * P.width + i;
     if (hit.kind == KIND_NONE) {
-        write_pixel(index, false, params.background, vec3<f32>(0.0), 0.0);
+        write_pixel(index, false, P.background, vec3<f32>(0.0), 0.0);
         return;
     }
     let surface = surface_at(hit, ray);

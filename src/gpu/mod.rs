@@ -24,6 +24,11 @@ use std::sync::Mutex;
 pub const SHADER_SOURCE: &str = include_str!("../../shaders/raycast.wgsl");
 
 /// Workgroup edge, as in `@workgroup_size(8, 8)`.
+pub(crate) fn workgroup() -> (u32, u32) {
+    let x = std::env::var("RCWX").ok().and_then(|v| v.parse().ok()).unwrap_or(8);
+    let y = std::env::var("RCWY").ok().and_then(|v| v.parse().ok()).unwrap_or(8);
+    (x, y)
+}
 const WORKGROUP: u32 = 8;
 
 /// The output tile of one dispatch. Small tiles stay in the CPU's caches on lavapipe:
@@ -131,7 +136,7 @@ impl KernelConfig {
     }
 
     /// The values for `PipelineCompilationOptions::constants`.
-    pub fn constants(&self) -> [(&'static str, f64); 16] {
+    pub fn constants(&self) -> [(&'static str, f64); 19] {
         let b = |v: bool| if v { 1.0 } else { 0.0 };
         [
             ("HAS_SPHERES", b(self.has_spheres)),
@@ -150,6 +155,9 @@ impl KernelConfig {
             ("SPHERE_TEST", self.sphere_test as u32 as f64),
             ("USE_BVH", b(self.use_bvh)),
             ("USE_BINS", b(self.use_bins)),
+            ("WORKGROUP_X", workgroup().0 as f64),
+            ("WORKGROUP_Y", workgroup().1 as f64),
+            ("EXPERIMENT", std::env::var("RCX").ok().and_then(|v| v.parse::<f64>().ok()).unwrap_or(0.0)),
         ]
     }
 }
@@ -375,7 +383,7 @@ impl GpuRenderer {
         }
         let rows = (self.options.max_tile_bytes.min(adapter_budget) / row_bytes).max(1);
         // Whole workgroup rows where possible, so no dispatch ends in a half-empty workgroup.
-        let rows = if rows >= WORKGROUP as u64 { rows - rows % WORKGROUP as u64 } else { rows };
+        let rows = if rows >= 64 { rows - rows % 64 } else { rows };
         Ok(rows.min(max_groups * WORKGROUP as u64) as u32)
     }
 }

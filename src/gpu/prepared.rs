@@ -7,7 +7,7 @@
 
 use super::flatten::SceneBuffers;
 use super::layout::{Params, PixelLayout};
-use super::{GpuError, GpuRenderer, KernelConfig, RenderStats, Timer, BINDINGS, OUTPUT_BINDING, WORKGROUP};
+use super::{GpuError, GpuRenderer, KernelConfig, RenderStats, Timer, BINDINGS, OUTPUT_BINDING};
 use crate::render::{row_tiles, Frame, RenderOptions};
 use crate::scene::Scene;
 use std::sync::mpsc::sync_channel;
@@ -170,7 +170,8 @@ impl<'a> PreparedScene<'a> {
                 encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("raycast"), timestamp_writes });
             pass.set_pipeline(&self.pipeline);
             pass.set_bind_group(0, &s.bind_group, &[]);
-            pass.dispatch_workgroups(self.options.width.div_ceil(WORKGROUP), rows.div_ceil(WORKGROUP), 1);
+            let (wx, wy) = super::workgroup();
+            pass.dispatch_workgroups(self.options.width.div_ceil(wx), rows.div_ceil(wy), 1);
         }
         encoder.copy_buffer_to_buffer(&s.output, 0, &s.readback, 0, size);
         if let Some(timer) = &s.timer {
