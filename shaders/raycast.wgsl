@@ -40,9 +40,13 @@ const SPHERE_PRECISE: u32 = 1u;
 // (gpu::binning); else flat loops over each kind.
 override USE_BVH: bool = false;
 override USE_BINS: bool = false;
-override EXPERIMENT: u32 = 0u;
-override WORKGROUP_X: u32 = 8u;
-override WORKGROUP_Y: u32 = 8u;
+// Each invocation renders PACKET pixels stacked in a column (image rows PACKET·m …). With
+// bins PACKET is 4, so that every primitive loaded from a bin is tested against four rays:
+// on lavapipe a load whose address is the same for every lane still costs a gather per lane
+// group, and the packet pays it once for four pixels. Without bins it is 1: lavapipe stops
+// any invocation's loops after 65535 iterations in all (docs/lavapipe.md), which four flat
+// walks over many primitives would reach. (The host's gpu::KernelConfig::packet.)
+override PACKET: u32 = 1u;
 
 const F32_MAX: f32 = 3.40282347e38;
 // The "no hit" distance: never less than any closest-so-far.
@@ -411,10 +415,10 @@ struct Closest {
     index: u32,
 }
 
-fn closest_hit(ray: Ray, bin: u32) -> Closest {
-    let tmin = t_min();
+// The nearest plane hit (planes are infinite and stay outside bins and the hierarchy; a
+// near plane hit prunes them).
+fn closest_plane(ray: Ray, tmin: f32) -> Closest {
     var best = Closest(NO_HIT, KIND_NONE, 0u);
-    // Planes first: infinite, outside the hierarchy, and a near plane hit prunes it.
     if (HAS_PLANES) {
         for (var k = 0u; k < P.num_planes; k++) {
             let t = plane_t(planes[k], ray, tmin);
@@ -423,11 +427,15 @@ fn closest_hit(ray: Ray, bin: u32) -> Closest {
             }
         }
     }
-    // Only the watertight test outside bins reads the shear; otherwise the compiler drops it.
+    return best;
+}
+
+// The closest hit without bins: through the hierarchy, or flat loops over each kind.
+fn closest_hit(ray: Ray) -> Closest {
+    let tmin = t_min();
+    var best = closest_plane(ray, tmin);
+    // Only the watertight test reads the shear; otherwise the compiler drops it.
     let shear = shear_for(ray.direction);
-    if (USE_BINS) {
-        return walk_bin(bin, ray, shear, tmin, best);
-    }
     if (USE_BVH) {
         return traverse(ray, shear, tmin, best);
     }
@@ -632,26 +640,49 @@ fn try_binned(r: u32, ray: Ray, shear: Shear, tmin: f32, best: Closest) -> Close
     return out;
 }
 
-// The closest hit among the primitives listed in this pixel's bin, nearest first: a ray
-// stops once its closest hit is nearer than the next item can be. The list, and so the
-// loop, is the same for every invocation of the workgroup.
-fn walk_bin(bin: u32, ray: Ray, shear: Shear, tmin: f32, start: Closest) -> Closest {
-    var best = start;
+// The packet's rays and closest hits so far (private: registers once the calls are inlined).
+var<private> R0: Ray;
+var<private> R1: Ray;
+var<private> R2: Ray;
+var<private> R3: Ray;
+var<private> H0: Closest;
+var<private> H1: Closest;
+var<private> H2: Closest;
+var<private> H3: Closest;
+
+// The closest hits of the packet among the primitives listed in its bin, nearest first. The
+// list, and so the loop, is the same for every invocation of the workgroup. Each item is loaded once and tested against the four rays; the
+// walk stops once every ray's closest hit is nearer than the next item can be.
+fn walk_bin_packet(bin: u32, tmin: f32) {
     let range = bin_ranges[bin];
-    if (EXPERIMENT == 3u && range.y == 0u) {
-        return best;
-    }
+    let s0 = shear_for(R0.direction);
+    let s1 = shear_for(R1.direction);
+    let s2 = shear_for(R2.direction);
+    let s3 = shear_for(R3.direction);
     for (var k = range.x; k < range.x + range.y; k++) {
         let item = bin_items[k];
-        if (EXPERIMENT >= 2u) {
-            let candidate = try_binned(item.reference, ray, shear, tmin, best);
-            best = candidate;
-            continue;
-        }
-        if (item.near > best.t) {
+        if (item.near > max(max(H0.t, H1.t), max(H2.t, H3.t))) {
             break;
         }
-        best = try_binned(item.reference, ray, shear, tmin, best);
+        let r = item.reference;
+        if (!HAS_SPHERES && !HAS_ELLIPSOIDS && TRIANGLE_TEST == TRIANGLE_WATERTIGHT) {
+            let tri = eye_triangles[r];
+            H0 = keep_nearer(H0, eye_triangle_t(tri, R0, tmin), r);
+            H1 = keep_nearer(H1, eye_triangle_t(tri, R1, tmin), r);
+            H2 = keep_nearer(H2, eye_triangle_t(tri, R2, tmin), r);
+            H3 = keep_nearer(H3, eye_triangle_t(tri, R3, tmin), r);
+            continue;
+        }
+        H0 = try_binned(r, R0, s0, tmin, H0);
+        H1 = try_binned(r, R1, s1, tmin, H1);
+        H2 = try_binned(r, R2, s2, tmin, H2);
+        H3 = try_binned(r, R3, s3, tmin, H3);
+    }
+}
+
+fn keep_nearer(best: Closest, t: f32, triangle: u32) -> Closest {
+    if (t < best.t) {
+        return Closest(t, KIND_TRIANGLE, triangle);
     }
     return best;
 }
@@ -751,23 +782,12 @@ fn write_pixel(index: u32, hit: bool, color: vec3<f32>, normal: vec3<f32>, t: f3
     }
 }
 
-@compute @workgroup_size(WORKGROUP_X, WORKGROUP_Y)
-fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(workgroup_id) group: vec3<u32>) {
-    P = params;
-    let i = id.x;
-    let row = id.y;
-    var bin = ((P.first_row + row) / 8u) * P.bin_columns + i / 8u;
-    if (EXPERIMENT >= 1u) {
-        bin = (P.first_row / 8u + group.y) * P.bin_columns + group.x;
-    }
-    if (i >= P.width || row >= P.tile_rows) {
+// Shades and writes tile-local row `row` of column i, when it belongs to this tile.
+fn finish_pixel(i: u32, row: i32, ray: Ray, hit: Closest) {
+    if (row < 0 || row >= i32(P.tile_rows)) {
         return;
     }
-    // Image rows count from the top, the camera's j from the bottom.
-    let j = P.height - 1u - (P.first_row + row);
-    let ray = primary_ray(i, j);
-    let hit = closest_hit(ray, bin);
-    let index = row * P.width + i;
+    let index = u32(row) * P.width + i;
     if (hit.kind == KIND_NONE) {
         write_pixel(index, false, P.background, vec3<f32>(0.0), 0.0);
         return;
@@ -778,4 +798,47 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(workgroup_id) gro
         color = shade(surface, ray);
     }
     write_pixel(index, true, color, surface.normal, hit.t);
+}
+
+// The ray of image row `image_row` (from the top), clamped into the image so that a packet
+// reaching past its last row still casts a valid ray (whose pixel is not written).
+fn ray_of_row(i: u32, image_row: u32) -> Ray {
+    let clamped = min(image_row, P.height - 1u);
+    // Image rows count from the top, the camera's j from the bottom.
+    return primary_ray(i, P.height - 1u - clamped);
+}
+
+// One invocation per column and packet: image rows base + PACKET·y … + PACKET − 1, where base
+// is the tile's first row rounded down to a multiple of PACKET, so that a packet never
+// straddles two bins (8 rows, a multiple of PACKET) whatever the tile.
+@compute @workgroup_size(8, 8)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    P = params;
+    let i = id.x;
+    let base = P.first_row - P.first_row % PACKET + id.y * PACKET;
+    let first = i32(base) - i32(P.first_row);
+    if (i >= P.width || first >= i32(P.tile_rows)) {
+        return;
+    }
+    if (!USE_BINS) {
+        for (var p = 0u; p < PACKET; p++) {
+            let ray = ray_of_row(i, base + p);
+            finish_pixel(i, first + i32(p), ray, closest_hit(ray));
+        }
+        return;
+    }
+    R0 = ray_of_row(i, base);
+    R1 = ray_of_row(i, base + 1u);
+    R2 = ray_of_row(i, base + 2u);
+    R3 = ray_of_row(i, base + 3u);
+    let tmin = t_min();
+    H0 = closest_plane(R0, tmin);
+    H1 = closest_plane(R1, tmin);
+    H2 = closest_plane(R2, tmin);
+    H3 = closest_plane(R3, tmin);
+    walk_bin_packet((base / 8u) * P.bin_columns + i / 8u, tmin);
+    finish_pixel(i, first, R0, H0);
+    finish_pixel(i, first + 1, R1, H1);
+    finish_pixel(i, first + 2, R2, H2);
+    finish_pixel(i, first + 3, R3, H3);
 }

@@ -95,6 +95,11 @@ impl Bins {
         Bins { columns, ranges, items, eye_triangles, build_ms: start.elapsed().as_secs_f64() * 1e3 }
     }
 
+    /// The longest list of any bin: every invocation of that bin walks it in one loop.
+    pub fn max_list_length(&self) -> u32 {
+        self.ranges.iter().map(|r| r[1]).max().unwrap_or(0)
+    }
+
     /// Candidates an invocation tests on average (each pixel of a bin tests the whole list
     /// at worst): the cost model compares this with the hierarchy.
     pub fn mean_list_length(&self) -> f64 {

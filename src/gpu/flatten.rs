@@ -49,6 +49,12 @@ pub const BVH_MIN_PRIMITIVES: usize = 8;
 /// hierarchy.
 pub const BINS_MAX_MEAN_LIST: f64 = 64.0;
 
+/// lavapipe ends an invocation's loops after this many iterations in all (a guard of its
+/// compiler against endless loops; docs/lavapipe.md), so no loop of ours may come near it:
+/// bins whose longest list does go to the hierarchy, and flat loops over more primitives
+/// are refused.
+pub const LOOP_LIMIT: u32 = 65535;
+
 /// The hierarchy as the kernel reads it.
 #[derive(Clone, Debug, Default)]
 pub struct GpuBvh {
@@ -121,7 +127,8 @@ impl SceneBuffers {
         if matches!(options.acceleration, Acceleration::Auto | Acceleration::Bins) {
             let candidates = binning::candidates(&self.triangles, &self.sphere_bounds, &self.ellipsoid_bounds);
             let bins = Bins::build(rays, &self.triangles, &candidates);
-            if options.acceleration == Acceleration::Bins || bins.mean_list_length() <= BINS_MAX_MEAN_LIST {
+            let short = bins.mean_list_length() <= BINS_MAX_MEAN_LIST && bins.max_list_length() <= LOOP_LIMIT / 2;
+            if options.acceleration == Acceleration::Bins || short {
                 self.bins = Some(bins);
                 return;
             }

@@ -24,12 +24,10 @@ use std::sync::Mutex;
 pub const SHADER_SOURCE: &str = include_str!("../../shaders/raycast.wgsl");
 
 /// Workgroup edge, as in `@workgroup_size(8, 8)`.
-pub(crate) fn workgroup() -> (u32, u32) {
-    let x = std::env::var("RCWX").ok().and_then(|v| v.parse().ok()).unwrap_or(8);
-    let y = std::env::var("RCWY").ok().and_then(|v| v.parse().ok()).unwrap_or(8);
-    (x, y)
-}
 const WORKGROUP: u32 = 8;
+
+/// The packet of a kernel walking bins (see [`KernelConfig::packet`]).
+const BIN_PACKET: u32 = 4;
 
 /// The output tile of one dispatch. Small tiles stay in the CPU's caches on lavapipe:
 /// bunny_40k at 2048² ran at 7.4 Mrays/s with 64 MiB tiles, 9.3 with 16 MiB, 9.8 with 8 MiB,
@@ -136,7 +134,17 @@ impl KernelConfig {
     }
 
     /// The values for `PipelineCompilationOptions::constants`.
-    pub fn constants(&self) -> [(&'static str, f64); 19] {
+    /// Pixels each invocation renders, stacked in a column (the kernel's `PACKET`): 4 rays
+    /// share each load from a bin; other kernels render one pixel per invocation.
+    pub fn packet(&self) -> u32 {
+        if self.use_bins {
+            BIN_PACKET
+        } else {
+            1
+        }
+    }
+
+    pub fn constants(&self) -> [(&'static str, f64); 17] {
         let b = |v: bool| if v { 1.0 } else { 0.0 };
         [
             ("HAS_SPHERES", b(self.has_spheres)),
@@ -155,9 +163,7 @@ impl KernelConfig {
             ("SPHERE_TEST", self.sphere_test as u32 as f64),
             ("USE_BVH", b(self.use_bvh)),
             ("USE_BINS", b(self.use_bins)),
-            ("WORKGROUP_X", workgroup().0 as f64),
-            ("WORKGROUP_Y", workgroup().1 as f64),
-            ("EXPERIMENT", std::env::var("RCX").ok().and_then(|v| v.parse::<f64>().ok()).unwrap_or(0.0)),
+            ("PACKET", self.packet() as f64),
         ]
     }
 }
@@ -383,8 +389,10 @@ impl GpuRenderer {
         }
         let rows = (self.options.max_tile_bytes.min(adapter_budget) / row_bytes).max(1);
         // Whole workgroup rows where possible, so no dispatch ends in a half-empty workgroup.
-        let rows = if rows >= 64 { rows - rows % 64 } else { rows };
-        Ok(rows.min(max_groups * WORKGROUP as u64) as u32)
+        // Whole workgroups of the largest packet, whichever kernel runs.
+        let group_rows = (WORKGROUP * BIN_PACKET) as u64;
+        let rows = if rows >= group_rows { rows - rows % group_rows } else { rows };
+        Ok(rows.min((max_groups - 1) * group_rows) as u32)
     }
 }
 

@@ -7,7 +7,7 @@
 
 use super::flatten::SceneBuffers;
 use super::layout::{Params, PixelLayout};
-use super::{GpuError, GpuRenderer, KernelConfig, RenderStats, Timer, BINDINGS, OUTPUT_BINDING};
+use super::{GpuError, GpuRenderer, KernelConfig, RenderStats, Timer, BINDINGS, OUTPUT_BINDING, WORKGROUP};
 use crate::render::{row_tiles, Frame, RenderOptions};
 use crate::scene::Scene;
 use std::sync::mpsc::sync_channel;
@@ -17,6 +17,8 @@ use wgpu::util::DeviceExt;
 pub struct PreparedScene<'a> {
     gpu: &'a GpuRenderer,
     pipeline: wgpu::ComputePipeline,
+    /// Pixels per invocation ([`KernelConfig::packet`]).
+    packet: u32,
     layout: PixelLayout,
     params: Params,
     options: RenderOptions,
@@ -57,7 +59,17 @@ impl<'a> PreparedScene<'a> {
         let start = std::time::Instant::now();
         let rays = crate::camera::PrimaryRays::for_camera(&scene.camera, options.width, options.height);
         let buffers = SceneBuffers::new(scene, &rays, &gpu.options);
-        let pipeline = gpu.pipeline(KernelConfig::new(&buffers, layout, options));
+        let flat = buffers.bins.is_none() && buffers.bvh.is_none();
+        let primitives =
+            buffers.spheres.len() + buffers.ellipsoids.len() + buffers.planes.len() + buffers.triangles.len();
+        if flat && primitives > super::flatten::LOOP_LIMIT as usize / 2 {
+            return Err(GpuError::TooLarge(format!(
+                "{primitives} primitives in flat loops (at most {} without bins or a hierarchy)",
+                super::flatten::LOOP_LIMIT / 2
+            )));
+        }
+        let config = KernelConfig::new(&buffers, layout, options);
+        let pipeline = gpu.pipeline(config);
         let inputs = upload_inputs(gpu, &buffers)?;
         let tile_rows = gpu.tile_rows(options.width, &layout)?;
         let tiles = options.height.div_ceil(tile_rows);
@@ -67,6 +79,7 @@ impl<'a> PreparedScene<'a> {
         Ok(PreparedScene {
             gpu,
             pipeline,
+            packet: config.packet(),
             layout,
             params: buffers.params,
             options: *options,
@@ -170,8 +183,9 @@ impl<'a> PreparedScene<'a> {
                 encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("raycast"), timestamp_writes });
             pass.set_pipeline(&self.pipeline);
             pass.set_bind_group(0, &s.bind_group, &[]);
-            let (wx, wy) = super::workgroup();
-            pass.dispatch_workgroups(self.options.width.div_ceil(wx), rows.div_ceil(wy), 1);
+            // Packets start at the tile's first row rounded down to a multiple of PACKET.
+            let packets = (first_row % self.packet + rows).div_ceil(self.packet);
+            pass.dispatch_workgroups(self.options.width.div_ceil(WORKGROUP), packets.div_ceil(WORKGROUP), 1);
         }
         encoder.copy_buffer_to_buffer(&s.output, 0, &s.readback, 0, size);
         if let Some(timer) = &s.timer {
