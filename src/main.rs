@@ -3,32 +3,50 @@
 mod app;
 
 use app::backend::Backend;
-use app::cli::{self, BackendChoice, Command, RenderArgs};
+use app::cli::{self, BackendChoice, Command, Habits, RenderArgs, Verbosity};
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
     give_mesa_a_runtime_dir();
-    match cli::parse_args(std::env::args_os().skip(1)) {
-        Ok(Command::Help) => {
+    let line = match cli::parse_command_line(std::env::args_os().skip(1)) {
+        Ok(line) => line,
+        Err(e) => {
+            eprintln!("raycaster: {e}");
+            return ExitCode::from(2);
+        }
+    };
+    let habits = line.habits;
+    if let Some(threads) = habits.threads {
+        // Before anything uses rayon: the reference's rows run on the global pool.
+        if let Err(e) = rayon::ThreadPoolBuilder::new().num_threads(threads).build_global() {
+            eprintln!("raycaster: --threads {threads}: {e}");
+            return ExitCode::FAILURE;
+        }
+    }
+    match line.command {
+        Command::Help => {
             println!("{}", cli::USAGE);
             ExitCode::SUCCESS
         }
-        Ok(Command::Render(args)) => render(&args),
-        Ok(Command::Compare { args, max_diff_pixels }) => compare(&args, max_diff_pixels),
-        Ok(Command::Batch { file, backend }) => batch(&file, backend),
-        Ok(Command::Bench(bench_args)) => bench(&bench_args),
-        Err(e) => {
-            eprintln!("raycaster: {e}");
-            ExitCode::from(2)
+        Command::Version => {
+            println!("raycaster {}", env!("CARGO_PKG_VERSION"));
+            ExitCode::SUCCESS
         }
+        Command::Render(args) => render(&args, habits),
+        Command::Compare { args, max_diff_pixels } => compare(&args, max_diff_pixels, habits),
+        Command::Batch { file, backend } => batch(&file, backend, habits),
+        Command::Bench(bench_args) => bench(&bench_args, habits),
     }
 }
 
-fn render(args: &RenderArgs) -> ExitCode {
-    let Some(backend) = open_backend(args.backend) else { return ExitCode::FAILURE };
-    match app::job::run(args, &backend) {
-        Ok(warnings) => {
-            warn(&warnings);
+fn render(args: &RenderArgs, habits: Habits) -> ExitCode {
+    let Some(backend) = open_backend(args.backend, habits) else { return ExitCode::FAILURE };
+    match app::job::run(args, &backend, habits.verbosity != Verbosity::Quiet) {
+        Ok(report) => {
+            warn(&report.warnings, habits);
+            if habits.verbosity == Verbosity::Verbose {
+                notice(&report.verbose_lines(&backend, args));
+            }
             ExitCode::SUCCESS
         }
         Err(e) => {
@@ -38,11 +56,11 @@ fn render(args: &RenderArgs) -> ExitCode {
     }
 }
 
-fn compare(args: &RenderArgs, max_diff_pixels: Option<u64>) -> ExitCode {
-    let Some(Backend::Gpu(gpu)) = open_backend(BackendChoice::Gpu) else { return ExitCode::FAILURE };
+fn compare(args: &RenderArgs, max_diff_pixels: Option<u64>, habits: Habits) -> ExitCode {
+    let Some(Backend::Gpu(gpu)) = open_backend(BackendChoice::Gpu, habits) else { return ExitCode::FAILURE };
     match app::job::compare(args, &gpu) {
         Ok(comparison) => {
-            warn(&comparison.warnings);
+            warn(&comparison.warnings, habits);
             println!(
                 "gpu ({}) against the f64 reference ({} triangles, {} spheres):",
                 gpu.adapter_info().name,
@@ -64,7 +82,7 @@ fn compare(args: &RenderArgs, max_diff_pixels: Option<u64>) -> ExitCode {
     }
 }
 
-fn batch(file: &std::path::Path, choice: BackendChoice) -> ExitCode {
+fn batch(file: &std::path::Path, choice: BackendChoice, habits: Habits) -> ExitCode {
     let text = match std::fs::read_to_string(file) {
         Ok(text) => text,
         Err(e) => {
@@ -72,9 +90,20 @@ fn batch(file: &std::path::Path, choice: BackendChoice) -> ExitCode {
             return ExitCode::FAILURE;
         }
     };
-    let Some(backend) = open_backend(choice) else { return ExitCode::FAILURE };
-    let (warnings, failures) = app::job::run_batch(&text, &backend);
-    warn(&warnings);
+    let Some(backend) = open_backend(choice, habits) else { return ExitCode::FAILURE };
+    let (done, failures) = app::job::run_batch(&text, &backend, habits.verbosity != Verbosity::Quiet);
+    for line in &done {
+        warn(&line.report.warnings, habits);
+    }
+    if habits.verbosity == Verbosity::Verbose {
+        notice(&[format!("backend: {}", backend.describe())]);
+        for line in &done {
+            let report = &line.report;
+            let ms = report.parse_ms + report.render_ms + report.write_ms;
+            notice(&[format!("{}:{}: {ms:.1} ms", file.display(), line.line)]);
+        }
+        notice(&[format!("memory: peak resident {:.0} MiB", app::bench::peak_memory_mib())]);
+    }
     for f in &failures {
         eprintln!("raycaster: {}:{}: {}", file.display(), f.line, f.message);
     }
@@ -85,9 +114,9 @@ fn batch(file: &std::path::Path, choice: BackendChoice) -> ExitCode {
     }
 }
 
-fn bench(args: &cli::BenchArgs) -> ExitCode {
+fn bench(args: &cli::BenchArgs, habits: Habits) -> ExitCode {
     use app::bench;
-    let Some(Backend::Gpu(gpu)) = open_backend(BackendChoice::Gpu) else { return ExitCode::FAILURE };
+    let Some(Backend::Gpu(gpu)) = open_backend(BackendChoice::Gpu, habits) else { return ExitCode::FAILURE };
     let cases = match bench::standard_cases(&args.corpus, args.quick) {
         Ok(cases) => cases
             .into_iter()
@@ -100,7 +129,9 @@ fn bench(args: &cli::BenchArgs) -> ExitCode {
     };
     let mut rows = Vec::new();
     for case in &cases {
-        eprintln!("bench: {} {}×{} ({})", case.name, case.width, case.height, case.triangle_test.name());
+        if habits.verbosity != Verbosity::Quiet {
+            eprintln!("bench: {} {}×{} ({})", case.name, case.width, case.height, case.triangle_test.name());
+        }
         match bench::run_case(&gpu, case, args.runs) {
             Ok(row) => rows.push(row),
             Err(e) => {
@@ -141,11 +172,11 @@ fn write_plot(_: &[app::bench::Row], _: &std::path::Path) -> Result<(), String> 
     Ok(())
 }
 
-fn open_backend(choice: BackendChoice) -> Option<Backend> {
+fn open_backend(choice: BackendChoice, habits: Habits) -> Option<Backend> {
     match Backend::open(choice) {
-        Ok((backend, notice)) => {
-            if let Some(notice) = notice {
-                eprintln!("raycaster: {notice}");
+        Ok((backend, fallback)) => {
+            if let Some(fallback) = fallback.filter(|_| habits.verbosity != Verbosity::Quiet) {
+                eprintln!("raycaster: {fallback}");
             }
             Some(backend)
         }
@@ -156,9 +187,19 @@ fn open_backend(choice: BackendChoice) -> Option<Backend> {
     }
 }
 
-fn warn(warnings: &[String]) {
+fn warn(warnings: &[String], habits: Habits) {
+    if habits.verbosity == Verbosity::Quiet {
+        return;
+    }
     for w in warnings {
         eprintln!("raycaster: warning: {w}");
+    }
+}
+
+/// `--verbose`'s lines, on stderr so that stdout stays the command's output.
+fn notice(lines: &[String]) {
+    for line in lines {
+        eprintln!("raycaster: {line}");
     }
 }
 /// Mesa's Vulkan drivers print "XDG_RUNTIME_DIR is invalid or not set" on every start when
