@@ -37,7 +37,10 @@ impl Backend {
                 let info = gpu.adapter_info();
                 format!("gpu, {} ({:?}, {:?})", info.name, info.backend, info.device_type)
             }
-            Backend::Cpu => format!("cpu, the f64 reference on {} threads", rayon::current_num_threads()),
+            Backend::Cpu => match rayon::current_num_threads() {
+                1 => "cpu, the f64 reference on 1 thread".to_string(),
+                n => format!("cpu, the f64 reference on {n} threads"),
+            },
         }
     }
 

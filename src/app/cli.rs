@@ -633,6 +633,60 @@ mod tests {
         assert_eq!(parse("-input s -h"), Ok(Command::Help));
     }
 
+    #[test]
+    fn shared_flags_anywhere_and_for_every_command() {
+        let line = parse_command_line("-q -input s -size 1 1 -output o.tga --threads 3".split_whitespace()).unwrap();
+        assert_eq!(line.habits, Habits { verbosity: Verbosity::Quiet, threads: Some(3) });
+        let line = parse_command_line("batch c.txt --verbose".split_whitespace()).unwrap();
+        assert_eq!(line.habits.verbosity, Verbosity::Verbose);
+        let line = parse_command_line("bench --quick -v --threads=1".split_whitespace()).unwrap();
+        assert_eq!(line.habits, Habits { verbosity: Verbosity::Verbose, threads: Some(1) });
+        // Defaults: normal verbosity, one thread per core.
+        let line = parse_command_line("-input s -size 1 1 -output o.tga".split_whitespace()).unwrap();
+        assert_eq!(line.habits, Habits::default());
+        assert_eq!(parse("--version"), Ok(Command::Version));
+        assert_eq!(parse("-V"), Ok(Command::Version));
+        assert!(parse("-q -v").unwrap_err().0.contains("cannot be given together"));
+    }
+
+    #[test]
+    fn flag_equals_value() {
+        let a = render("--input=s.txt -size 3 4 --output=o.png --backend=cpu --triangle-test=moller");
+        let b = render("-input s.txt -size 3 4 -output o.png --backend cpu --triangle-test moller");
+        assert_eq!(a, b);
+        // An '=' inside the value stays in the value.
+        assert_eq!(render("--input=a=b.txt -size 1 1 -output o.tga").input, PathBuf::from("a=b.txt"));
+        match parse("compare -input s -size 1 1 -output o.tga --max-diff-pixels=4") {
+            Ok(Command::Compare { max_diff_pixels, .. }) => assert_eq!(max_diff_pixels, Some(4)),
+            other => panic!("{other:?}"),
+        }
+        assert!(parse("--size=3 4 -input s -output o.tga").unwrap_err().0.contains("--size W H"));
+        assert!(parse("-input s -size 1 1 -depth=1 2 d.tga").unwrap_err().0.contains("-depth MIN MAX FILE"));
+        assert!(parse("-input s -size 1 1 -output o.tga --shade-back=yes").unwrap_err().0.contains("takes no value"));
+        assert!(parse("-input s -size 1 1 -output o.tga --backend=").unwrap_err().0.contains("''"));
+    }
+
+    #[test]
+    fn unknown_flags_suggest_the_nearest() {
+        let cases = [
+            ("-input s -size 1 1 -outptu o.tga", "did you mean '-output'?"),
+            ("-input s -size 1 1 -output o.tga --shade-bakc", "did you mean '--shade-back'?"),
+            ("-input s -size 1 1 -output o.tga -shadeback", "did you mean '-shade_back'?"),
+            ("-input s -size 1 1 -output o.tga --thread 2", "did you mean '--threads'?"),
+            ("compare -input s -size 1 1 -output o.tga --max-diff-pixel 2", "did you mean '--max-diff-pixels'?"),
+            ("batch c.txt --backedn cpu", "did you mean '--backend'?"),
+            ("bench --quik", "did you mean '--quick'?"),
+        ];
+        for (line, needle) in cases {
+            let err = parse(line).expect_err(line).to_string();
+            assert!(err.contains(needle), "{line}: {err}");
+        }
+        for line in ["-input s -size 1 1 -output o.tga -frobnicate", "-input s -size 1 1 -output o.tga -x"] {
+            let err = parse(line).expect_err(line).to_string();
+            assert!(!err.contains("did you mean"), "{line}: {err}");
+        }
+    }
+
     /// Each bad line gives an error naming the offending flag or value.
     #[test]
     fn errors_name_the_flag() {
@@ -654,6 +708,9 @@ mod tests {
             ("-input s -input t -size 1 1 -output o.tga", "-input is given twice"),
             ("-input s -size 1 1 -output o.tga stray", "'stray'"),
             ("-input", "-input expects a file name"),
+            ("-input s -size 1 1 -output o.tga --threads 0", "--threads: '0'"),
+            ("-input s -size 1 1 -output o.tga --threads lots", "--threads: 'lots'"),
+            ("-input s -size 1 1 -output o.tga --threads", "--threads expects a number"),
         ];
         for (line, needle) in cases {
             let err = parse(line).expect_err(line);
