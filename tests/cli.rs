@@ -365,6 +365,12 @@ fn quiet_silences_warnings_but_not_errors() {
     assert_eq!(stderr(&batch), "");
 }
 
+/// The octahedrons (16 triangles: enough for a hierarchy) at 40×30 into `out`, with `flags`.
+fn octahedron_40x30(out: &Path, flags: &[&str]) -> Output {
+    let args = ["-input", "scenes/mesh_octahedron.txt", "-size", "40", "30", "-output", path_str(out)];
+    raycaster(&[flags, &args[..]].concat())
+}
+
 /// `-v` on the CPU: the backend with its threads (as `--threads` set them), and where the time
 /// and memory went; the image does not depend on the number of threads.
 #[test]
@@ -373,19 +379,7 @@ fn verbose_and_threads_on_the_cpu() {
     let mut images = Vec::new();
     for threads in ["1", "3"] {
         let out = dir.path().join(format!("o{threads}.tga"));
-        let result = raycaster(&[
-            "-v",
-            "--threads",
-            threads,
-            "--backend=cpu",
-            "-input",
-            "scenes/mesh_octahedron.txt",
-            "-size",
-            "40",
-            "30",
-            "-output",
-            path_str(&out),
-        ]);
+        let result = octahedron_40x30(&out, &["-v", "--threads", threads, "--backend=cpu"]);
         let message = stderr(&result);
         assert!(result.status.success(), "{message}");
         let plural = if threads == "1" { "thread" } else { "threads" };
@@ -407,25 +401,14 @@ fn verbose_on_the_gpu_names_adapter_and_kernel() {
     let Some(gpu) = common::gpu() else { return };
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("o.png");
-    let result = raycaster(&[
-        "--verbose",
-        "--backend",
-        "gpu",
-        "--triangle-test",
-        "moller",
-        "-input",
-        "scenes/mesh_octahedron.txt",
-        "-size",
-        "40",
-        "30",
-        "-output",
-        path_str(&out),
-    ]);
+    let result = octahedron_40x30(&out, &["--verbose", "--backend", "gpu", "--triangle-test", "moller"]);
     let message = stderr(&result);
     assert!(result.status.success(), "{message}");
     assert!(message.contains(&format!("backend: gpu, {}", gpu.adapter_info().name)), "{message}");
     assert!(message.contains("kernel: moller triangle test, robust sphere test"), "{message}");
-    for needle in ["time: parsing ", ", preparing ", ", writing ", "memory: peak resident ", "scene data on the GPU"] {
+    let needles =
+        ["time: parsing ", ", preparing ", "(hierarchy ", ", writing ", "memory: peak resident ", "on the GPU"];
+    for needle in needles {
         assert!(message.contains(needle), "{needle}: {message}");
     }
 }
