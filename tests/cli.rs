@@ -407,7 +407,7 @@ fn verbose_on_the_gpu_names_adapter_and_kernel() {
     assert!(message.contains(&format!("backend: gpu, {}", gpu.adapter_info().name)), "{message}");
     assert!(message.contains("kernel: moller triangle test, robust sphere test"), "{message}");
     let needles =
-        ["time: parsing ", ", preparing ", "(hierarchy ", ", writing ", "memory: peak resident ", "on the GPU"];
+        ["time: parsing ", " (preparing ", "; hierarchy ", ", writing ", "memory: peak resident ", "on the GPU"];
     for needle in needles {
         assert!(message.contains(needle), "{needle}: {message}");
     }

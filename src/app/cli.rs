@@ -43,7 +43,8 @@ raycaster batch FILE [--backend B]
   is: arguments without the program name, paths relative to the working directory, split at
   spaces), in one process with one GPU device. Blank lines and lines starting with # are
   skipped. A failing line is reported with its number and the rest still run; the exit
-  status is then 1.
+  status is then 1. -q, -v and --threads belong on batch's own command line (on a line of
+  FILE they are ignored).
 
 raycaster bench [--quick] [--runs N] [--out DIR] [--corpus DIR] [--only NAME]
   Times the GPU kernel on the course scenes, larger meshes and image sizes, with the error

@@ -52,23 +52,25 @@ impl Report {
     pub fn verbose_lines(&self, backend: &Backend, args: &RenderArgs) -> Vec<String> {
         let stats = &self.stats;
         let mut lines = vec![format!("backend: {}", backend.describe())];
-        let mut time = format!("time: parsing {:.1} ms", self.parse_ms);
+        let tiles = if stats.tiles == 1 { "1 tile".to_string() } else { format!("{} tiles", stats.tiles) };
+        let mut time = format!("time: parsing {:.1} ms, rendering {:.1} ms in {tiles}", self.parse_ms, self.render_ms);
         if let Backend::Gpu(_) = backend {
             lines.push(format!(
                 "kernel: {} triangle test, {} sphere test",
                 args.triangle_test.name(),
                 args.sphere_test.name()
             ));
-            time += &format!(", preparing {:.1} ms (buffers, kernel compilation, upload)", stats.prepare_ms);
+            // The parts of the GPU's rendering time that it measures on its own.
+            time += &format!(" (preparing {:.1} ms: buffers, pipeline, upload", stats.prepare_ms);
             if let Some(bvh) = stats.bvh_build_ms {
-                time += &format!(" (hierarchy {bvh:.1} ms)");
+                time += &format!("; hierarchy {bvh:.1} ms of it");
             }
             if let Some(ns) = stats.kernel_ns {
-                time += &format!(", kernel {:.1} ms", ns as f64 / 1e6);
+                time += &format!("; kernel {:.1} ms", ns as f64 / 1e6);
             }
+            time += ")";
         }
-        let tiles = if stats.tiles == 1 { "1 tile".to_string() } else { format!("{} tiles", stats.tiles) };
-        time += &format!(", rendering {:.1} ms in {tiles}, writing {:.1} ms", self.render_ms, self.write_ms);
+        time += &format!(", writing {:.1} ms", self.write_ms);
         lines.push(time);
         let mut memory = format!("memory: peak resident {:.0} MiB", crate::app::bench::peak_memory_mib());
         if let Backend::Gpu(_) = backend {
