@@ -147,11 +147,13 @@ fn bench(args: &cli::BenchArgs, habits: Habits) -> ExitCode {
         .and_then(|()| write_plot(&rows, &args.out));
     match written {
         Ok(()) => {
-            eprintln!(
-                "bench: wrote {}/bench.csv{}",
-                args.out.display(),
-                if cfg!(feature = "plot") { " and bench.png" } else { "" }
-            );
+            if habits.verbosity != Verbosity::Quiet {
+                eprintln!(
+                    "bench: wrote {}/bench.csv{}",
+                    args.out.display(),
+                    if cfg!(feature = "plot") { " and bench.png" } else { "" }
+                );
+            }
             ExitCode::SUCCESS
         }
         Err(e) => {

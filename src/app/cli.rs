@@ -50,7 +50,7 @@ raycaster bench [--quick] [--runs N] [--out DIR] [--corpus DIR] [--only NAME]
   Times the GPU kernel on the course scenes, larger meshes and image sizes, with the error
   against the f64 reference for each row; prints a Markdown table and writes DIR/bench.csv
   and DIR/bench.png (default DIR target/bench, 5 runs; the course's files are read from
-  --corpus, else $RAYCASTER_CORPUS, else ../shared/mit6837).
+  --corpus, else $RAYCASTER_CORPUS, else ../shared/mit6837 beside the source checkout).
   --quick: a few small cases, seconds in all. --only: the cases whose name contains NAME.
 
 raycaster compare ... [--max-diff-pixels N]
@@ -548,11 +548,13 @@ fn unknown_flag(context: &str, text: &str, known: &[&str]) -> UsageError {
 }
 
 /// Where `raycaster bench` looks for the course's files without `--corpus`:
-/// `$RAYCASTER_CORPUS`, else `../shared/mit6837` from the working directory.
+/// `$RAYCASTER_CORPUS`, else `../shared/mit6837` beside the crate, as the tests do. The bench
+/// is a developer's tool run from a checkout, so the checkout's path, not the working
+/// directory, is what stays true.
 fn default_corpus() -> PathBuf {
     match std::env::var_os("RAYCASTER_CORPUS") {
         Some(dir) if !dir.is_empty() => PathBuf::from(dir),
-        _ => PathBuf::from("../shared/mit6837"),
+        _ => PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/mit6837"),
     }
 }
 
