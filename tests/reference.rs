@@ -124,7 +124,7 @@ fn non_square_images_crop_the_shorter_side() {
     assert_eq!(rays.ray(3, 1).origin, DVec3::new(1.5, 0.5, 0.0));
 }
 
-/// A triangle under a mirroring transform keeps the SPEC's normal normalise(M⁻ᵀ·n).
+/// A triangle under a mirroring transform keeps the normal normalise(M⁻ᵀ·n) of docs/SPEC.md §4.
 #[test]
 fn mirrored_triangle_normal_follows_the_inverse_transpose() {
     let s = scene(

@@ -6,9 +6,9 @@ use raycaster::gpu::{GpuError, GpuRenderer, RenderStats};
 use raycaster::render::{row_tiles, Frame, RenderOptions};
 use raycaster::scene::Scene;
 
-/// About how many pixels the CPU reference renders per tile (enough rows to keep both cores
-/// busy, few enough to bound memory).
-const CPU_TILE_PIXELS: u32 = 1 << 20;
+/// About how many pixels the CPU reference renders per tile: enough rows to keep every core
+/// busy, few enough to bound memory and to move a progress bar every second or so.
+const CPU_TILE_PIXELS: u32 = 1 << 18;
 
 /// A ready renderer.
 pub enum Backend {
@@ -26,6 +26,20 @@ impl Backend {
             BackendChoice::Auto => match GpuRenderer::new() {
                 Ok(gpu) => Ok((Backend::Gpu(Box::new(gpu)), None)),
                 Err(e) => Ok((Backend::Cpu, Some(format!("{e}; rendering with the CPU reference instead")))),
+            },
+        }
+    }
+
+    /// What renders, in words: the adapter, or the reference and its threads.
+    pub fn describe(&self) -> String {
+        match self {
+            Backend::Gpu(gpu) => {
+                let info = gpu.adapter_info();
+                format!("gpu, {} ({:?}, {:?})", info.name, info.backend, info.device_type)
+            }
+            Backend::Cpu => match rayon::current_num_threads() {
+                1 => "cpu, the f64 reference on 1 thread".to_string(),
+                n => format!("cpu, the f64 reference on {n} threads"),
             },
         }
     }

@@ -2,12 +2,14 @@
 
 use crate::app::backend::Backend;
 use crate::app::cli::{Outputs, RenderArgs};
-use raycaster::gpu::GpuError;
+use crate::app::progress::Progress;
+use raycaster::gpu::{GpuError, RenderStats};
 use raycaster::image_io::{self, ImageError, ImageFile};
 use raycaster::metrics::OutputErrors;
 use raycaster::render::RenderOptions;
 use raycaster::scene::{self, Scene, SceneError, SceneWarning};
 use std::fmt;
+use std::time::Instant;
 
 /// Anything that can stop a render.
 #[derive(Debug, thiserror::Error)]
@@ -34,17 +36,76 @@ pub fn options_for(args: &RenderArgs) -> RenderOptions {
     }
 }
 
+/// What a render did, and where its time went (for `--verbose`).
+#[derive(Clone, Debug)]
+pub struct Report {
+    pub warnings: Vec<SceneWarning>,
+    pub stats: RenderStats,
+    pub parse_ms: f64,
+    /// The backend's time, from the first tile's preparation to the last tile's read-back,
+    /// less the time spent writing.
+    pub render_ms: f64,
+    /// Converting tiles to 8-bit rows, encoding and writing them, and renaming the files.
+    pub write_ms: f64,
+}
+
+impl Report {
+    /// The lines `--verbose` prints after a render with `backend`.
+    pub fn verbose_lines(&self, backend: &Backend, args: &RenderArgs) -> Vec<String> {
+        let stats = &self.stats;
+        let mut lines = vec![format!("backend: {}", backend.describe())];
+        let tiles = if stats.tiles == 1 { "1 tile".to_string() } else { format!("{} tiles", stats.tiles) };
+        let mut time = format!("time: parsing {:.1} ms, rendering {:.1} ms in {tiles}", self.parse_ms, self.render_ms);
+        if let Backend::Gpu(_) = backend {
+            lines.push(format!(
+                "kernel: {} triangle test, {} sphere test",
+                args.triangle_test.name(),
+                args.sphere_test.name()
+            ));
+            // The parts of the GPU's rendering time that it measures on its own.
+            time += &format!(" (preparing {:.1} ms: buffers, pipeline, upload", stats.prepare_ms);
+            if let Some(bvh) = stats.bvh_build_ms {
+                time += &format!("; hierarchy {bvh:.1} ms of it");
+            }
+            if let Some(ns) = stats.kernel_ns {
+                time += &format!("; kernel {:.1} ms", ns as f64 / 1e6);
+            }
+            time += ")";
+        }
+        time += &format!(", writing {:.1} ms", self.write_ms);
+        lines.push(time);
+        let mut memory = format!("memory: peak resident {:.0} MiB", crate::app::bench::peak_memory_mib());
+        if let Backend::Gpu(_) = backend {
+            memory += &format!(", scene data on the GPU {:.1} KiB", stats.scene_bytes as f64 / 1024.0);
+        }
+        lines.push(memory);
+        lines
+    }
+}
+
 /// Loads `args.input`, renders it with `backend` and writes every requested image (all of
-/// them or, on failure, none). Returns the scene's warnings.
-pub fn run(args: &RenderArgs, backend: &Backend) -> Result<Vec<SceneWarning>, Error> {
+/// them or, on failure, none). With `progress`, a bar over the rows appears on a terminal
+/// when the render takes long.
+pub fn run(args: &RenderArgs, backend: &Backend, progress: bool) -> Result<Report, Error> {
+    let start = Instant::now();
     let scene = scene::load_scene(&args.input)?;
-    render_scene(&scene, args, backend)?;
-    Ok(scene.warnings)
+    let parse_ms = start.elapsed().as_secs_f64() * 1e3;
+    let (stats, render_ms, write_ms) = render_scene(&scene, args, backend, progress)?;
+    Ok(Report { warnings: scene.warnings, stats, parse_ms, render_ms, write_ms })
 }
 
 /// Renders an already-loaded scene as `args` asks and writes the images, tile by tile, so
-/// memory stays bounded by the tile whatever the image size.
-pub fn render_scene(scene: &Scene, args: &RenderArgs, backend: &Backend) -> Result<(), Error> {
+/// memory stays bounded by the tile whatever the image size. Returns the backend's
+/// statistics, and the milliseconds spent rendering and writing.
+pub fn render_scene(
+    scene: &Scene,
+    args: &RenderArgs,
+    backend: &Backend,
+    progress: bool,
+) -> Result<(RenderStats, f64, f64), Error> {
+    let start = Instant::now();
+    let mut writing = std::time::Duration::ZERO;
+    let bar = Progress::new(progress, args.height as u64, "rows");
     let options = options_for(args);
     let mut outputs = Vec::new();
     if let Some(path) = &args.output {
@@ -56,7 +117,8 @@ pub fn render_scene(scene: &Scene, args: &RenderArgs, backend: &Backend) -> Resu
     if let Some(depth) = &args.depth {
         outputs.push((ImageFile::create(&depth.path, args.width, args.height)?, Kind::Depth(depth.min, depth.max)));
     }
-    backend.render_tiles(scene, &options, |_first_row, tile| {
+    let stats = backend.render_tiles(scene, &options, |_first_row, tile| {
+        let written = Instant::now();
         for (file, kind) in &mut outputs {
             let rows = match *kind {
                 Kind::Color => image_io::color_image(&tile),
@@ -65,11 +127,17 @@ pub fn render_scene(scene: &Scene, args: &RenderArgs, backend: &Backend) -> Resu
             };
             file.write_rows(rows.as_raw())?;
         }
+        writing += written.elapsed();
+        bar.advance(tile.height as u64);
         Ok::<(), Error>(())
     })?;
+    drop(bar);
+    let render_ms = (start.elapsed() - writing).as_secs_f64() * 1e3;
+    let finishing = Instant::now();
     let finished = outputs.into_iter().map(|(file, _)| file.finish()).collect::<Result<Vec<_>, _>>()?;
     image_io::persist_all(finished)?;
-    Ok(())
+    let write_ms = (writing + finishing.elapsed()).as_secs_f64() * 1e3;
+    Ok((stats, render_ms, write_ms))
 }
 
 /// Which image an output file receives.
@@ -145,6 +213,11 @@ pub fn compare(args: &RenderArgs, outputs: Outputs, gpu: &raycaster::gpu::GpuRen
 pub enum LineReport {
     Warning(SceneWarning),
     Failure(String),
+    /// The line rendered, in this many milliseconds (parsing, rendering, writing; for
+    /// `--verbose`).
+    Rendered {
+        ms: f64,
+    },
 }
 
 impl fmt::Display for LineReport {
@@ -152,6 +225,7 @@ impl fmt::Display for LineReport {
         match self {
             LineReport::Warning(w) => w.fmt(f),
             LineReport::Failure(message) => f.write_str(message),
+            LineReport::Rendered { ms } => write!(f, "{ms:.1} ms"),
         }
     }
 }
@@ -163,31 +237,45 @@ pub struct BatchCount {
     pub failed: usize,
 }
 
-/// Runs each render command line of `text` with `backend`, handing every warning and
-/// failure to `report` with its line number as it happens. A failing line does not stop
-/// the others.
-pub fn run_batch(text: &str, backend: &Backend, mut report: impl FnMut(usize, LineReport)) -> BatchCount {
+/// Runs each render command line of `text` with `backend`, handing every warning, failure
+/// and finished line to `report` with its line number as it happens. A failing line does not
+/// stop the others. With `progress`, a bar over the lines appears on a terminal when the
+/// batch takes long; it steps aside while `report` prints.
+pub fn run_batch(
+    text: &str,
+    backend: &Backend,
+    progress: bool,
+    mut report: impl FnMut(usize, LineReport),
+) -> BatchCount {
+    let is_command = |line: &&str| line.split_whitespace().next().is_some_and(|w| !w.starts_with('#'));
+    let bar = Progress::new(progress, text.lines().filter(is_command).count() as u64, "lines");
+    let mut tell = |line: usize, what: LineReport| bar.suspend(|| report(line, what));
     let mut count = BatchCount::default();
     for (index, line) in text.lines().enumerate() {
         let line_number = index + 1;
-        let words: Vec<&str> = line.split_whitespace().collect();
-        if words.is_empty() || words[0].starts_with('#') {
+        if !is_command(&line) {
             continue;
         }
+        let words: Vec<&str> = line.split_whitespace().collect();
         count.run += 1;
         let failure = match crate::app::cli::parse_args(&words) {
-            Ok(crate::app::cli::Command::Render(args)) => match run(&args, backend) {
-                Ok(warnings) => {
-                    warnings.into_iter().for_each(|w| report(line_number, LineReport::Warning(w)));
-                    continue;
+            Ok(crate::app::cli::Command::Render(args)) => match run(&args, backend, false) {
+                Ok(done) => {
+                    let ms = done.parse_ms + done.render_ms + done.write_ms;
+                    done.warnings.into_iter().for_each(|w| tell(line_number, LineReport::Warning(w)));
+                    tell(line_number, LineReport::Rendered { ms });
+                    None
                 }
-                Err(e) => e.to_string(),
+                Err(e) => Some(e.to_string()),
             },
-            Ok(_) => "only render command lines can be batched".into(),
-            Err(e) => e.0,
+            Ok(_) => Some("only render command lines can be batched".into()),
+            Err(e) => Some(e.0),
         };
-        count.failed += 1;
-        report(line_number, LineReport::Failure(failure));
+        if let Some(failure) = failure {
+            count.failed += 1;
+            tell(line_number, LineReport::Failure(failure));
+        }
+        bar.advance(1);
     }
     count
 }
