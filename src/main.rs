@@ -15,7 +15,8 @@ fn main() -> ExitCode {
         }
         Ok(Command::Render(args)) => render(&args),
         Ok(Command::Compare { args, max_diff_pixels }) => compare(&args, max_diff_pixels),
-        Ok(Command::Batch { file, backend }) => batch(&file, backend),
+        Ok(Command::Batch { file, backend, shard }) => batch(&file, backend, shard),
+        Ok(Command::Stitch(stitch_args)) => stitch(&stitch_args),
         Ok(Command::Bench(bench_args)) => bench(&bench_args),
         Err(e) => {
             eprintln!("raycaster: {e}");
@@ -64,7 +65,7 @@ fn compare(args: &RenderArgs, max_diff_pixels: Option<u64>) -> ExitCode {
     }
 }
 
-fn batch(file: &std::path::Path, choice: BackendChoice) -> ExitCode {
+fn batch(file: &std::path::Path, choice: BackendChoice, shard: Option<app::split::Split>) -> ExitCode {
     let text = match std::fs::read_to_string(file) {
         Ok(text) => text,
         Err(e) => {
@@ -73,7 +74,7 @@ fn batch(file: &std::path::Path, choice: BackendChoice) -> ExitCode {
         }
     };
     let Some(backend) = open_backend(choice) else { return ExitCode::FAILURE };
-    let (warnings, failures) = app::job::run_batch(&text, &backend);
+    let (warnings, failures) = app::job::run_batch(&text, &backend, shard);
     warn(&warnings);
     for f in &failures {
         eprintln!("raycaster: {}:{}: {}", file.display(), f.line, f.message);
@@ -82,6 +83,19 @@ fn batch(file: &std::path::Path, choice: BackendChoice) -> ExitCode {
         ExitCode::SUCCESS
     } else {
         ExitCode::FAILURE
+    }
+}
+
+/// `raycaster stitch`: every problem found is one line of its own.
+fn stitch(args: &cli::StitchArgs) -> ExitCode {
+    match app::split::stitch(args) {
+        Ok(_) => ExitCode::SUCCESS,
+        Err(app::split::Refusal(problems)) => {
+            for p in problems {
+                eprintln!("raycaster: stitch: {p}");
+            }
+            ExitCode::FAILURE
+        }
     }
 }
 

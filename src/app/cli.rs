@@ -2,6 +2,7 @@
 //! `-shade_back`) and double-dash ones (`--input`, `--shade-back`) are the same flags, in any
 //! order. Errors are one line naming the flag; the binary exits with status 2 on them.
 
+use crate::app::split::Split;
 use raycaster::image_io::ImageFormat;
 use raycaster::render::{SphereTest, TriangleTest};
 use std::ffi::OsString;
@@ -19,25 +20,38 @@ raycaster: render an MIT 6.837 scene file on the GPU (wgpu) or with the f64 CPU 
 Usage: raycaster [compare] -input SCENE -size W H [-output FILE] [-normals FILE]
                  [-depth MIN MAX FILE] [-shade_back] [--backend gpu|cpu|auto]
                  [--triangle-test cramer|moller|watertight] [--sphere-test naive|robust]
+                 [--tile K/N]
 
   -input FILE            scene file (obj_file paths resolve from its folder)
   -size W H              image size in pixels
-  -output FILE           diffuse-shaded image (.tga or .png)
-  -normals FILE          normal visualisation |N| (.tga or .png)
-  -depth MIN MAX FILE    depth visualisation, white at MIN, black at MAX (.tga or .png)
+  -output FILE           diffuse-shaded image (.tga or .png; .exr: linear, unclamped)
+  -normals FILE          normal visualisation |N| (.tga or .png; .exr: the signed normal)
+  -depth MIN MAX FILE    depth visualisation, white at MIN, black at MAX (.tga or .png;
+                         .exr: the distance t itself, +inf where nothing is hit; MIN and
+                         MAX are then not used)
   -shade_back            shade back-facing hits as if they faced the viewer
   --backend B            gpu, cpu (the f64 reference) or auto (default: the GPU if one is
                          found, else the CPU with a notice)
   --triangle-test T      the GPU's ray/triangle test (default watertight)
   --sphere-test S        the GPU's ray/sphere test (default robust)
+  --tile K/N             render only band K (0-based, from the top) of N bands of rows
+                         and write FILE.part-K-of-N beside each output; see stitch
   -h, --help             this text
 
-raycaster batch FILE [--backend B]
+raycaster stitch [-output FILE] [-normals FILE] [-depth MIN MAX FILE] [-input SCENE]
+                 [-size W H] [--keep-parts]
+  Assembles the part files of a --tile render into the images a single render writes,
+  byte for byte. Refuses, naming them, when parts are missing or come from different
+  renders (or from another scene or size than -input/-size say). Deletes the parts once
+  the images are written, unless --keep-parts.
+
+raycaster batch FILE [--backend B] [--shard K/N]
   Runs every line of FILE as a render command line (the course's commands.txt works as it
   is: arguments without the program name, paths relative to the working directory, split at
   spaces), in one process with one GPU device. Blank lines and lines starting with # are
   skipped. A failing line is reported with its number and the rest still run; the exit
-  status is then 1.
+  status is then 1. --shard K/N: run only the command lines whose index (0-based,
+  counting command lines only, not blank or comment lines) is K modulo N.
 
 raycaster bench [--quick] [--runs N] [--out DIR] [--corpus DIR] [--only NAME]
   Times the GPU kernel on the course scenes, larger meshes and image sizes, with the error
@@ -76,6 +90,8 @@ pub struct RenderArgs {
     pub backend: BackendChoice,
     pub triangle_test: TriangleTest,
     pub sphere_test: SphereTest,
+    /// `--tile K/N`: render band K of N and write part files (see [`crate::app::split`]).
+    pub tile: Option<Split>,
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -97,7 +113,11 @@ pub enum Command {
     Batch {
         file: PathBuf,
         backend: BackendChoice,
+        /// `--shard K/N`: only the command lines whose index is K modulo N.
+        shard: Option<Split>,
     },
+    /// `raycaster stitch`: assemble the part files of a split render.
+    Stitch(StitchArgs),
     /// `raycaster bench`: speed and error per scene and size.
     Bench(BenchArgs),
     Help,
@@ -115,6 +135,19 @@ pub struct BenchArgs {
     pub corpus: PathBuf,
     /// Only the cases whose name contains this.
     pub only: Option<String>,
+}
+
+/// `raycaster stitch`: the render's output flags, and what to check the parts against.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StitchArgs {
+    pub output: Option<PathBuf>,
+    pub normals: Option<PathBuf>,
+    pub depth: Option<DepthArgs>,
+    /// Checked against the parts' scene hash when given.
+    pub input: Option<PathBuf>,
+    /// Checked against the parts' size when given.
+    pub size: Option<(u32, u32)>,
+    pub keep_parts: bool,
 }
 
 /// A bad command line, as one line of text.
@@ -142,6 +175,9 @@ where
     if args.first().is_some_and(|a| a == "bench") {
         return parse_bench(&args[1..]);
     }
+    if args.first().is_some_and(|a| a == "stitch") {
+        return parse_stitch(&args[1..]);
+    }
     let compare = args.first().is_some_and(|a| a == "compare");
     let mut values = Values { args: &args, next: usize::from(compare) };
     let mut max_diff_pixels = None;
@@ -152,6 +188,7 @@ where
     let (mut output, mut normals, mut depth) = (None, None, None);
     let mut shade_back = false;
     let mut backend = BackendChoice::Auto;
+    let mut tile = None;
     while let Some(raw) = values.next_raw() {
         let text = raw.to_string_lossy().into_owned();
         let Some(flag) = flag_name(&text) else {
@@ -184,6 +221,7 @@ where
             "backend" => backend = values.backend(&text)?,
             "triangle_test" => triangle_test = values.choice(&text, &TriangleTest::ALL.map(|t| (t.name(), t)))?,
             "sphere_test" => sphere_test = values.choice(&text, &SphereTest::ALL.map(|t| (t.name(), t)))?,
+            "tile" if !compare => tile = Some(values.split(&text)?),
             "max_diff_pixels" if compare => {
                 let value = values.take(&text, "a number of pixels")?;
                 let text_value = value.to_string_lossy();
@@ -201,8 +239,22 @@ where
     if output.is_none() && normals.is_none() && depth.is_none() {
         return Err(UsageError("nothing to write: give -output, -normals or -depth".into()));
     }
-    let args =
-        RenderArgs { input, width, height, output, normals, depth, shade_back, backend, triangle_test, sphere_test };
+    if let Some(t) = tile.filter(|t| t.count > height) {
+        return Err(UsageError(format!("--tile {}/{}: more bands than the image's {height} rows", t.index, t.count)));
+    }
+    let args = RenderArgs {
+        input,
+        width,
+        height,
+        output,
+        normals,
+        depth,
+        shade_back,
+        backend,
+        triangle_test,
+        sphere_test,
+        tile,
+    };
     if compare {
         return Ok(Command::Compare { args, max_diff_pixels });
     }
@@ -212,11 +264,12 @@ where
 /// `batch FILE [--backend B]`.
 fn parse_batch(args: &[OsString]) -> Result<Command, UsageError> {
     let mut values = Values { args, next: 0 };
-    let (mut file, mut backend) = (None, BackendChoice::Auto);
+    let (mut file, mut backend, mut shard) = (None, BackendChoice::Auto, None);
     while let Some(raw) = values.next_raw() {
         let text = raw.to_string_lossy().into_owned();
         match flag_name(&text).as_deref() {
             Some("backend") => backend = values.backend(&text)?,
+            Some("shard") => shard = Some(values.split(&text)?),
             Some("h" | "help") => return Ok(Command::Help),
             Some(_) => return Err(UsageError(format!("batch: unknown flag '{text}'"))),
             None if file.is_none() => file = Some(PathBuf::from(raw)),
@@ -224,7 +277,31 @@ fn parse_batch(args: &[OsString]) -> Result<Command, UsageError> {
         }
     }
     let file = file.ok_or_else(|| UsageError("batch expects a file of command lines".into()))?;
-    Ok(Command::Batch { file, backend })
+    Ok(Command::Batch { file, backend, shard })
+}
+
+/// `stitch [-output O] [-normals N] [-depth MIN MAX D] [-input S] [-size W H] [--keep-parts]`.
+fn parse_stitch(args: &[OsString]) -> Result<Command, UsageError> {
+    let mut values = Values { args, next: 0 };
+    let mut stitch =
+        StitchArgs { output: None, normals: None, depth: None, input: None, size: None, keep_parts: false };
+    while let Some(raw) = values.next_raw() {
+        let text = raw.to_string_lossy().into_owned();
+        match flag_name(&text).as_deref() {
+            Some("output") => stitch.output = Some(values.image_path(&text)?),
+            Some("normals") => stitch.normals = Some(values.image_path(&text)?),
+            Some("depth") => stitch.depth = Some(values.depth(&text)?),
+            Some("input") => stitch.input = Some(values.path(&text)?),
+            Some("size") => stitch.size = Some(values.size(&text)?),
+            Some("keep_parts") => stitch.keep_parts = true,
+            Some("h" | "help") => return Ok(Command::Help),
+            _ => return Err(UsageError(format!("stitch: unknown argument '{text}'"))),
+        }
+    }
+    if stitch.output.is_none() && stitch.normals.is_none() && stitch.depth.is_none() {
+        return Err(UsageError("stitch: nothing to stitch: give -output, -normals or -depth".into()));
+    }
+    Ok(Command::Stitch(stitch))
 }
 
 /// `bench [--quick] [--runs N] [--out DIR] [--corpus DIR]`.
@@ -300,7 +377,10 @@ impl Values<'_> {
     fn image_path(&mut self, flag: &str) -> Result<PathBuf, UsageError> {
         let path = self.path(flag)?;
         if ImageFormat::from_path(&path).is_none() {
-            return Err(UsageError(format!("{flag} {}: unsupported image format, use .tga or .png", path.display())));
+            return Err(UsageError(format!(
+                "{flag} {}: unsupported image format, use .tga, .png or .exr",
+                path.display()
+            )));
         }
         Ok(path)
     }
@@ -342,6 +422,14 @@ impl Values<'_> {
             return Err(UsageError(format!("{flag}: MIN ({min}) must be less than MAX ({max})")));
         }
         Ok(DepthArgs { min, max, path })
+    }
+
+    /// `K/N`: member K (0-based) of N.
+    fn split(&mut self, flag: &str) -> Result<Split, UsageError> {
+        let value = self.take(flag, "K/N")?;
+        let text = value.to_string_lossy();
+        Split::parse(&text)
+            .ok_or_else(|| UsageError(format!("{flag}: '{text}' is not K/N with whole numbers 0 ≤ K < N")))
     }
 
     fn backend(&mut self, flag: &str) -> Result<BackendChoice, UsageError> {
@@ -427,7 +515,7 @@ mod tests {
     fn batch() {
         assert_eq!(
             parse("batch commands.txt --backend gpu"),
-            Ok(Command::Batch { file: "commands.txt".into(), backend: BackendChoice::Gpu })
+            Ok(Command::Batch { file: "commands.txt".into(), backend: BackendChoice::Gpu, shard: None })
         );
         assert!(parse("batch").unwrap_err().0.contains("expects a file"));
         assert!(parse("batch a b").unwrap_err().0.contains("'b'"));

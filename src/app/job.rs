@@ -2,8 +2,10 @@
 
 use crate::app::backend::Backend;
 use crate::app::cli::RenderArgs;
+use crate::app::output::{self, Sink};
+use crate::app::split::{self, Split};
 use raycaster::gpu::GpuError;
-use raycaster::image_io::{self, ImageError, ImageFile};
+use raycaster::image_io::ImageError;
 use raycaster::render::RenderOptions;
 use raycaster::scene::{self, Scene, SceneError};
 
@@ -16,6 +18,9 @@ pub enum Error {
     Gpu(#[from] GpuError),
     #[error(transparent)]
     Image(#[from] ImageError),
+    /// Identifying a split render's parts (reading the scene's text again).
+    #[error("{0}")]
+    Split(String),
 }
 
 /// The render options a command line implies: only the outputs it names are computed.
@@ -41,40 +46,30 @@ pub fn run(args: &RenderArgs, backend: &Backend) -> Result<Vec<String>, Error> {
 }
 
 /// Renders an already-loaded scene as `args` asks and writes the images, tile by tile, so
-/// memory stays bounded by the tile whatever the image size.
+/// memory stays bounded by the tile whatever the image size. With `--tile K/N` only band K
+/// is rendered, into part files.
 pub fn render_scene(scene: &Scene, args: &RenderArgs, backend: &Backend) -> Result<(), Error> {
     let options = options_for(args);
-    let mut outputs = Vec::new();
-    if let Some(path) = &args.output {
-        outputs.push((ImageFile::create(path, args.width, args.height)?, Kind::Color));
-    }
-    if let Some(path) = &args.normals {
-        outputs.push((ImageFile::create(path, args.width, args.height)?, Kind::Normals));
-    }
-    if let Some(depth) = &args.depth {
-        outputs.push((ImageFile::create(&depth.path, args.width, args.height)?, Kind::Depth(depth.min, depth.max)));
-    }
-    backend.render_tiles(scene, &options, |_first_row, tile| {
-        for (file, kind) in &mut outputs {
-            let rows = match *kind {
-                Kind::Color => image_io::color_image(&tile),
-                Kind::Normals => image_io::normals_image(&tile),
-                Kind::Depth(min, max) => image_io::depth_image(&tile, min, max),
-            };
-            file.write_rows(rows.as_raw())?;
+    let outputs = output::outputs(&args.output, &args.normals, &args.depth);
+    let (first, rows) = args.tile.map_or((0, args.height), |t| t.band(args.height));
+    let mut sinks = match args.tile {
+        None => outputs.iter().map(|o| Sink::image(o, args.width, args.height)).collect::<Result<Vec<_>, _>>()?,
+        Some(tile) => split::part_headers(scene, args, backend, tile, &outputs)
+            .map_err(Error::Split)?
+            .into_iter()
+            .zip(&outputs)
+            .map(|(header, o)| Sink::part(header, o))
+            .collect::<Result<Vec<_>, _>>()?,
+    };
+    backend.render_band(scene, &options, first, rows, |_first_row, tile| {
+        for (sink, o) in sinks.iter_mut().zip(&outputs) {
+            sink.write(&o.pixels(&tile))?;
         }
         Ok::<(), Error>(())
     })?;
-    let finished = outputs.into_iter().map(|(file, _)| file.finish()).collect::<Result<Vec<_>, _>>()?;
-    image_io::persist_all(finished)?;
+    let finished = sinks.into_iter().map(Sink::finish).collect::<Result<Vec<_>, _>>()?;
+    output::persist_all(finished)?;
     Ok(())
-}
-
-/// Which image an output file receives.
-enum Kind {
-    Color,
-    Normals,
-    Depth(f32, f32),
 }
 
 /// What `raycaster compare` found: the GPU against the reference, per output.
@@ -117,18 +112,23 @@ pub struct BatchFailure {
     pub message: String,
 }
 
-/// Runs each render command line of `text` with `backend`.
-/// Returns the warnings printed along the way and the lines that failed; a failing line
-/// does not stop the others.
-pub fn run_batch(text: &str, backend: &Backend) -> (Vec<String>, Vec<BatchFailure>) {
+/// Runs each render command line of `text` with `backend` (with a shard, only its share:
+/// the command lines, blank and comment lines not counted, whose 0-based index is K
+/// modulo N). Returns the warnings printed along the way and the lines that failed; a
+/// failing line does not stop the others.
+pub fn run_batch(text: &str, backend: &Backend, shard: Option<Split>) -> (Vec<String>, Vec<BatchFailure>) {
     let mut warnings = Vec::new();
     let mut failures = Vec::new();
-    for (index, line) in text.lines().enumerate() {
-        let line_number = index + 1;
-        let words: Vec<&str> = line.split_whitespace().collect();
-        if words.is_empty() || words[0].starts_with('#') {
+    let commands = text.lines().enumerate().filter(|(_, line)| {
+        let first = line.split_whitespace().next();
+        first.is_some_and(|w| !w.starts_with('#'))
+    });
+    for (command, (index, line)) in commands.enumerate() {
+        if shard.is_some_and(|s| !s.takes(command)) {
             continue;
         }
+        let line_number = index + 1;
+        let words: Vec<&str> = line.split_whitespace().collect();
         let fail = |message: String| BatchFailure { line: line_number, message };
         match crate::app::cli::parse_args(&words) {
             Ok(crate::app::cli::Command::Render(args)) => match run(&args, backend) {

@@ -6,3 +6,5 @@ pub mod backend;
 pub mod bench;
 pub mod cli;
 pub mod job;
+pub mod output;
+pub mod split;
