@@ -500,3 +500,84 @@ fn copy_payload(part: &Part, output: &Output, sink: &mut Sink) -> Result<(), Ima
     }
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::app::cli::{parse_args, Command};
+
+    #[test]
+    fn bands_tile_the_image_and_differ_by_at_most_one_row() {
+        let bands: Vec<_> = (0..3).map(|k| Split { index: k, count: 3 }.band(23)).collect();
+        assert_eq!(bands, [(0, 7), (7, 8), (15, 8)]);
+        for (height, count) in [(1, 1), (7, 7), (100, 7), (65535, 64), (5, 3)] {
+            let mut next = 0;
+            for index in 0..count {
+                let (first, rows) = Split { index, count }.band(height);
+                assert_eq!(first, next);
+                assert!(rows == height / count || rows == height / count + 1, "{height}/{count}: {rows}");
+                next = first + rows;
+            }
+            assert_eq!(next, height);
+        }
+    }
+
+    #[test]
+    fn shards_take_every_nth_command() {
+        let shard = Split { index: 1, count: 3 };
+        assert_eq!((0..8).filter(|&c| shard.takes(c)).collect::<Vec<_>>(), [1, 4, 7]);
+    }
+
+    #[test]
+    fn parsing() {
+        assert_eq!(Split::parse("2/5"), Some(Split { index: 2, count: 5 }));
+        for bad in ["5/5", "0/0", "-1/3", "1", "a/b", "1/2/3", ""] {
+            assert_eq!(Split::parse(bad), None, "{bad}");
+        }
+        let words = |line: &str| parse_args(line.split_whitespace());
+        match words("-input s -size 4 9 -output o.exr --tile 1/3") {
+            Ok(Command::Render(args)) => assert_eq!(args.tile, Some(Split { index: 1, count: 3 })),
+            other => panic!("{other:?}"),
+        }
+        match words("batch f --shard 0/2") {
+            Ok(Command::Batch { shard, .. }) => assert_eq!(shard, Some(Split { index: 0, count: 2 })),
+            other => panic!("{other:?}"),
+        }
+        match words("stitch -depth 1 2 d.exr -size 4 9 --keep-parts") {
+            Ok(Command::Stitch(s)) => {
+                assert_eq!((s.size, s.keep_parts, s.output), (Some((4, 9)), true, None));
+                assert_eq!(s.depth.map(|d| d.path), Some("d.exr".into()));
+            }
+            other => panic!("{other:?}"),
+        }
+        assert!(words("compare -input s -size 4 4 -output o.tga --tile 0/2").is_err(), "compare renders no band");
+    }
+
+    #[test]
+    fn part_names_sit_beside_the_output() {
+        assert_eq!(part_path(Path::new("out/a.tga"), 2, 7), Path::new("out/a.tga.part-2-of-7"));
+        assert_eq!(part_path(Path::new("a.exr"), 0, 1), Path::new("a.exr.part-0-of-1"));
+    }
+
+    #[test]
+    fn headers_read_back() {
+        let header = PartHeader {
+            identity: Identity {
+                width: 640,
+                height: 480,
+                count: 4,
+                output: "depth 9 11 tga".into(),
+                scene: "ab".repeat(32),
+                flags: "--backend gpu --triangle-test watertight --sphere-test robust -shade_back".into(),
+            },
+            index: 3,
+            first_row: 360,
+            rows: 120,
+        };
+        let text = header.text(230400);
+        let mut bytes = text.clone().into_bytes();
+        bytes.extend_from_slice(&[0, 1, 2]);
+        assert_eq!(PartHeader::parse(&bytes), Ok((header, 230400, text.len() as u64)));
+        assert!(PartHeader::parse(b"P6\n640 480\n255\n\n").is_err());
+    }
+}
