@@ -127,6 +127,9 @@ impl PartHeader {
         let narrow = |v: u64| u32::try_from(v).map_err(|_| "part header: number out of range".to_string());
         let (width, height) = pair("size")?;
         let (index, count) = pair("tile")?;
+        if index >= count {
+            return Err(format!("part header: bad 'tile {index} {count}'"));
+        }
         let (first_row, rows) = pair("rows")?;
         let (_, flags) = field("flags")?.split_once(' ').unwrap_or(("", ""));
         let bytes = field("bytes")?.parse::<u64>().map_err(|_| "part header: bad 'bytes'".to_string())?;
@@ -355,7 +358,11 @@ fn check_parts(output: &Output, size: Option<(u32, u32)>, scene_hash: Option<&st
             Err(e) => problems.push(format!("{}: {e}", path.display())),
         }
     }
-    let Some(first) = parts.first() else { return Err(problems) };
+    // The split most parts belong to is the render; parts of another split are strays.
+    let mut counts = BTreeMap::new();
+    parts.iter().for_each(|p| *counts.entry(p.header.identity.count).or_insert(0) += 1);
+    let Some((&count, _)) = counts.iter().max_by_key(|&(&n, &found)| (found, n)) else { return Err(problems) };
+    let first = parts.iter().find(|p| p.header.identity.count == count).expect("counted from the parts");
     let reference = first.header.identity.clone();
     let expected = Identity {
         width: size.map_or(reference.width, |s| s.0),
@@ -376,11 +383,8 @@ fn check_parts(output: &Output, size: Option<(u32, u32)>, scene_hash: Option<&st
             d.push(format!("output '{}' (not '{}')", id.output, against.output));
         }
         if id.scene != against.scene {
-            d.push(format!(
-                "scene {} (not {})",
-                &id.scene[..id.scene.len().min(12)],
-                &against.scene[..12.min(against.scene.len())]
-            ));
+            let short = |hash: &str| hash.chars().take(12).collect::<String>();
+            d.push(format!("scene {}… (not {}…)", short(&id.scene), short(&against.scene)));
         }
         if id.flags != against.flags {
             d.push(format!("flags '{}' (not '{}')", id.flags, against.flags));
@@ -391,12 +395,12 @@ fn check_parts(output: &Output, size: Option<(u32, u32)>, scene_hash: Option<&st
     let against_args = what_differs(&reference, &expected);
     if !against_args.is_empty() {
         problems.push(format!(
-            "{}: from another render than asked for: {}",
+            "{name}: the parts (as {}) come from another render than asked for: {}",
             first.path.display(),
             against_args.join(", ")
         ));
     }
-    for part in &parts[1..] {
+    for part in parts.iter().filter(|p| !std::ptr::eq(*p, first)) {
         let d = what_differs(&part.header.identity, &reference);
         if !d.is_empty() {
             problems.push(format!(
@@ -448,6 +452,9 @@ fn find_parts(output: &Path) -> std::io::Result<Vec<(u32, u32, PathBuf)>> {
         let Some(rest) = name.strip_prefix(&prefix) else { continue };
         let Some((k, n)) = rest.split_once("-of-") else { continue };
         if let (Ok(k), Ok(n)) = (k.parse::<u32>(), n.parse::<u32>()) {
+            if k >= n {
+                continue;
+            }
             found.push((k, n, part_path(output, k, n)));
         }
     }
