@@ -36,7 +36,8 @@ fn run() -> Result<(), Failure> {
         Command::Version => exit::print(&format!("raycaster {}\n", env!("CARGO_PKG_VERSION"))),
         Command::Render(args) => render(&args, habits),
         Command::Compare { args, outputs, max_diff_pixels } => compare(&args, outputs, max_diff_pixels, habits),
-        Command::Batch { file, backend } => batch(&file, backend, habits),
+        Command::Batch { file, backend, shard } => batch(&file, backend, shard, habits),
+        Command::Stitch(stitch_args) => stitch(&stitch_args, habits),
         Command::Bench(bench_args) => bench(&bench_args, habits),
     }
 }
@@ -65,21 +66,32 @@ fn compare(args: &RenderArgs, outputs: Outputs, max_diff_pixels: Option<u64>, ha
     comparison.verdict(max_diff_pixels).map_err(Failure::Failed)
 }
 
-fn batch(file: &std::path::Path, choice: BackendChoice, habits: Habits) -> Result<(), Failure> {
+fn batch(
+    file: &std::path::Path,
+    choice: BackendChoice,
+    shard: Option<app::split::Split>,
+    habits: Habits,
+) -> Result<(), Failure> {
     let text = std::fs::read_to_string(file).map_err(|e| Failure::Failed(format!("{}: {e}", file.display())))?;
     let backend = open_backend(choice, habits)?;
     let located = |line: usize, report: &LineReport| format!("{}:{line}: {report}", file.display());
     // `--verbose`'s time of each line, printed after the batch.
     let mut timings = Vec::new();
     let count =
-        app::job::run_batch(&text, &backend, habits.verbosity != Verbosity::Quiet, |line, report| match report {
-            LineReport::Warning(_) if habits.verbosity == Verbosity::Quiet => {}
-            LineReport::Rendered { .. } if habits.verbosity == Verbosity::Verbose => {
-                timings.push(located(line, &report))
-            }
-            LineReport::Rendered { .. } => {}
-            _ => say(&located(line, &report)),
-        });
+        app::job::run_batch(
+            &text,
+            &backend,
+            shard,
+            habits.verbosity != Verbosity::Quiet,
+            |line, report| match report {
+                LineReport::Warning(_) if habits.verbosity == Verbosity::Quiet => {}
+                LineReport::Rendered { .. } if habits.verbosity == Verbosity::Verbose => {
+                    timings.push(located(line, &report))
+                }
+                LineReport::Rendered { .. } => {}
+                _ => say(&located(line, &report)),
+            },
+        );
     if habits.verbosity == Verbosity::Verbose {
         notice(&[format!("backend: {}", backend.describe())]);
         notice(&timings);
@@ -92,6 +104,22 @@ fn batch(file: &std::path::Path, choice: BackendChoice, habits: Habits) -> Resul
             count.failed,
             count.run
         )));
+    }
+    Ok(())
+}
+
+/// `raycaster stitch`: every problem found is one line of its own; the last is the failure
+/// `main` reports.
+fn stitch(args: &cli::StitchArgs, habits: Habits) -> Result<(), Failure> {
+    let stitched = app::split::stitch(args).map_err(|app::split::Refusal(mut problems)| {
+        let last = problems.pop().unwrap_or_default();
+        for p in problems {
+            say(&format!("stitch: {p}"));
+        }
+        Failure::Failed(format!("stitch: {last}"))
+    })?;
+    if habits.verbosity == Verbosity::Verbose {
+        notice(&[format!("stitch: {stitched} parts")]);
     }
     Ok(())
 }

@@ -44,20 +44,24 @@ impl Backend {
         }
     }
 
-    /// Renders in tiles of full rows, top first, handing each tile and its first row to
-    /// `on_tile`; see [`GpuRenderer::render_tiles`].
-    pub fn render_tiles<E: From<GpuError>>(
+    /// Renders image rows `first .. first + rows` (the whole image, or one band of a split
+    /// render) in tiles of full rows, top first, handing each tile and its first image row
+    /// to `on_tile`; see [`GpuRenderer::render_band`].
+    pub fn render_band<E: From<GpuError>>(
         &self,
         scene: &Scene,
         options: &RenderOptions,
+        first: u32,
+        rows: u32,
         mut on_tile: impl FnMut(u32, Frame) -> Result<(), E>,
     ) -> Result<RenderStats, E> {
         match self {
-            Backend::Gpu(gpu) => gpu.render_tiles(scene, options, on_tile),
+            Backend::Gpu(gpu) => gpu.render_band(scene, options, first, rows, on_tile),
             Backend::Cpu => {
                 let reference = Reference::new(scene, options);
                 let mut stats = RenderStats::default();
-                for (first_row, rows) in row_tiles(options.height, CPU_TILE_PIXELS / options.width) {
+                for (offset, rows) in row_tiles(rows, CPU_TILE_PIXELS / options.width) {
+                    let first_row = first + offset;
                     on_tile(first_row, reference.rows(first_row, rows))?;
                     stats.tiles += 1;
                 }

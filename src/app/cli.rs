@@ -2,6 +2,7 @@
 //! `-shade_back`) and double-dash ones (`--input`, `--shade-back`) are the same flags, in any
 //! order. Errors are one line naming the flag; the binary exits with status 2 on them.
 
+use crate::app::split::Split;
 use raycaster::image_io::ImageFormat;
 use raycaster::render::{SphereTest, TriangleTest};
 use std::ffi::OsString;
@@ -19,18 +20,22 @@ raycaster: render an MIT 6.837 scene file on the GPU (wgpu) or with the f64 CPU 
 Usage: raycaster [compare] -input SCENE -size W H [-output FILE] [-normals FILE]
                  [-depth MIN MAX FILE] [-shade_back] [--backend gpu|cpu|auto]
                  [--triangle-test cramer|moller|watertight] [--sphere-test naive|robust]
-                 [-q | -v] [--threads N]
+                 [--tile K/N] [-q | -v] [--threads N]
 
   -input FILE            scene file (obj_file paths resolve from its folder)
   -size W H              image size in pixels
-  -output FILE           diffuse-shaded image (.tga or .png)
-  -normals FILE          normal visualisation |N| (.tga or .png)
-  -depth MIN MAX FILE    depth visualisation, white at MIN, black at MAX (.tga or .png)
+  -output FILE           diffuse-shaded image (.tga or .png; .exr: linear, unclamped)
+  -normals FILE          normal visualisation |N| (.tga or .png; .exr: the signed normal)
+  -depth MIN MAX FILE    depth visualisation, white at MIN, black at MAX (.tga or .png;
+                         .exr: the distance t itself, +inf where nothing is hit; MIN and
+                         MAX are then not used)
   -shade_back            shade back-facing hits as if they faced the viewer
   --backend B            gpu, cpu (the f64 reference) or auto (default: the GPU if one is
                          found, else the CPU with a notice)
   --triangle-test T      the GPU's ray/triangle test (default watertight)
   --sphere-test S        the GPU's ray/sphere test (default robust)
+  --tile K/N             render only band K (0-based, from the top) of N bands of rows
+                         and write FILE.part-K-of-N beside each output; see stitch
   -q, --quiet            errors only: no warnings, notices or progress bar
   -v, --verbose          also the adapter, the kernel variant, where the time went and
                          the peak memory
@@ -38,13 +43,21 @@ Usage: raycaster [compare] -input SCENE -size W H [-output FILE] [-normals FILE]
   -h, --help             this text
   -V, --version          the version
 
-raycaster batch FILE [--backend B]
+raycaster stitch [-output FILE] [-normals FILE] [-depth MIN MAX FILE] [-input SCENE]
+                 [-size W H] [--keep-parts]
+  Assembles the part files of a --tile render into the images a single render writes,
+  byte for byte. Refuses, naming them, when parts are missing or come from different
+  renders (or from another scene or size than -input/-size say). Deletes the parts once
+  the images are written, unless --keep-parts.
+
+raycaster batch FILE [--backend B] [--shard K/N]
   Runs every line of FILE as a render command line (the course's commands.txt works as it
   is: arguments without the program name, paths relative to the working directory, split at
   spaces), in one process with one GPU device. Blank lines and lines starting with # are
   skipped. A failing line is reported with its number and the rest still run; the exit
-  status is then 1. -q, -v and --threads belong on batch's own command line (on a line of
-  FILE they are ignored).
+  status is then 1. --shard K/N: run only the command lines whose index (0-based,
+  counting command lines only, not blank or comment lines) is K modulo N. -q, -v and
+  --threads belong on batch's own command line (on a line of FILE they are ignored).
 
 raycaster bench [--quick] [--runs N] [--out DIR] [--corpus DIR] [--only NAME]
   Times the GPU kernel on the course scenes, larger meshes and image sizes, with the error
@@ -88,6 +101,8 @@ pub struct RenderArgs {
     pub backend: BackendChoice,
     pub triangle_test: TriangleTest,
     pub sphere_test: SphereTest,
+    /// `--tile K/N`: render band K of N and write part files (see [`crate::app::split`]).
+    pub tile: Option<Split>,
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -111,7 +126,11 @@ pub enum Command {
     Batch {
         file: PathBuf,
         backend: BackendChoice,
+        /// `--shard K/N`: only the command lines whose index is K modulo N.
+        shard: Option<Split>,
     },
+    /// `raycaster stitch`: assemble the part files of a split render.
+    Stitch(StitchArgs),
     /// `raycaster bench`: speed and error per scene and size.
     Bench(BenchArgs),
     Help,
@@ -139,6 +158,19 @@ pub struct BenchArgs {
     pub corpus: PathBuf,
     /// Only the cases whose name contains this.
     pub only: Option<String>,
+}
+
+/// `raycaster stitch`: the render's output flags, and what to check the parts against.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StitchArgs {
+    pub output: Option<PathBuf>,
+    pub normals: Option<PathBuf>,
+    pub depth: Option<DepthArgs>,
+    /// Checked against the parts' scene hash when given.
+    pub input: Option<PathBuf>,
+    /// Checked against the parts' size when given.
+    pub size: Option<(u32, u32)>,
+    pub keep_parts: bool,
 }
 
 /// A bad command line, as one line of text.
@@ -176,6 +208,8 @@ where
         parse_batch(&args[1..], &mut habits)
     } else if args.first().is_some_and(|a| a == "bench") {
         parse_bench(&args[1..], &mut habits)
+    } else if args.first().is_some_and(|a| a == "stitch") {
+        parse_stitch(&args[1..], &mut habits)
     } else {
         parse_render(&args, &mut habits)
     }?;
@@ -195,10 +229,11 @@ fn parse_render(args: &[OsString], habits: &mut Habits) -> Result<Command, Usage
     let (mut output, mut normals, mut depth) = (None, None, None);
     let mut shade_back = false;
     let mut backend = BackendChoice::Auto;
+    let mut tile = None;
     while let Some(raw) = values.next_flag() {
         let text = raw.to_string_lossy().into_owned();
         let Some(flag) = flag_name(&text) else {
-            return Err(UsageError(format!("unexpected argument '{text}': flags start with '-'")));
+            return Err(unexpected_argument(&text, values.next == 1));
         };
         let set_once = |seen: bool| if seen { Err(UsageError(format!("{text} is given twice"))) } else { Ok(()) };
         match flag.as_str() {
@@ -234,6 +269,7 @@ fn parse_render(args: &[OsString], habits: &mut Habits) -> Result<Command, Usage
             }
             "triangle_test" => triangle_test = values.choice(&text, &TriangleTest::ALL.map(|t| (t.name(), t)))?,
             "sphere_test" => sphere_test = values.choice(&text, &SphereTest::ALL.map(|t| (t.name(), t)))?,
+            "tile" if !compare => tile = Some(values.split(&text)?),
             "max_diff_pixels" if compare => {
                 let value = values.take(&text, "a number of pixels")?;
                 let text_value = value.to_string_lossy();
@@ -246,7 +282,7 @@ fn parse_render(args: &[OsString], habits: &mut Habits) -> Result<Command, Usage
             _ => {
                 let mut known = RENDER_FLAGS.to_vec();
                 if compare {
-                    known.retain(|&k| k != "backend");
+                    known.retain(|&k| k != "backend" && k != "tile");
                     known.extend(["outputs", "max_diff_pixels"]);
                 }
                 return Err(unknown_flag("", &text, &known));
@@ -256,8 +292,22 @@ fn parse_render(args: &[OsString], habits: &mut Habits) -> Result<Command, Usage
     }
     let input = input.ok_or_else(|| UsageError("-input SCENE is required".into()))?;
     let (width, height) = size.ok_or_else(|| UsageError("-size W H is required".into()))?;
-    let args =
-        RenderArgs { input, width, height, output, normals, depth, shade_back, backend, triangle_test, sphere_test };
+    if let Some(t) = tile.filter(|t: &Split| t.count > height) {
+        return Err(UsageError(format!("--tile {}/{}: more bands than the image's {height} rows", t.index, t.count)));
+    }
+    let args = RenderArgs {
+        input,
+        width,
+        height,
+        output,
+        normals,
+        depth,
+        shade_back,
+        backend,
+        triangle_test,
+        sphere_test,
+        tile,
+    };
     if compare {
         return compare_command(args, listed_outputs.unwrap_or_default(), max_diff_pixels);
     }
@@ -340,22 +390,54 @@ fn names_a_folder(path: &Path) -> bool {
 /// `batch FILE [--backend B]`.
 fn parse_batch(args: &[OsString], habits: &mut Habits) -> Result<Command, UsageError> {
     let mut values = Values::new(args, 0);
-    let (mut file, mut backend) = (None, BackendChoice::Auto);
+    let (mut file, mut backend, mut shard) = (None, BackendChoice::Auto, None);
     while let Some(raw) = values.next_flag() {
         let text = raw.to_string_lossy().into_owned();
         match flag_name(&text).as_deref() {
             Some("backend") => backend = values.backend(&text)?,
+            Some("shard") => shard = Some(values.split(&text)?),
             Some("h" | "help") => return Ok(Command::Help),
             Some("V" | "version") => return Ok(Command::Version),
             Some(shared) if Habits::takes(shared) => habits.accept(shared, &text, &mut values)?,
-            Some(_) => return Err(unknown_flag("batch: ", &text, &[&["backend"], SHARED_FLAGS].concat())),
+            Some(_) => return Err(unknown_flag("batch: ", &text, &[&["backend", "shard"], SHARED_FLAGS].concat())),
             None if file.is_none() => file = Some(PathBuf::from(raw)),
             None => return Err(UsageError(format!("batch: unexpected argument '{text}'"))),
         }
         values.no_value_left(&text)?;
     }
     let file = file.ok_or_else(|| UsageError("batch expects a file of command lines".into()))?;
-    Ok(Command::Batch { file, backend })
+    Ok(Command::Batch { file, backend, shard })
+}
+
+/// `stitch [-output O] [-normals N] [-depth MIN MAX D] [-input S] [-size W H] [--keep-parts]`.
+fn parse_stitch(args: &[OsString], habits: &mut Habits) -> Result<Command, UsageError> {
+    let mut values = Values::new(args, 0);
+    let mut stitch =
+        StitchArgs { output: None, normals: None, depth: None, input: None, size: None, keep_parts: false };
+    while let Some(raw) = values.next_flag() {
+        let text = raw.to_string_lossy().into_owned();
+        match flag_name(&text).as_deref() {
+            Some("output") => stitch.output = Some(values.image_path(&text)?),
+            Some("normals") => stitch.normals = Some(values.image_path(&text)?),
+            Some("depth") => stitch.depth = Some(values.depth(&text)?),
+            Some("input") => stitch.input = Some(values.path(&text)?),
+            Some("size") => stitch.size = Some(values.size(&text)?),
+            Some("keep_parts") => stitch.keep_parts = true,
+            Some("h" | "help") => return Ok(Command::Help),
+            Some("V" | "version") => return Ok(Command::Version),
+            Some(shared) if Habits::takes(shared) => habits.accept(shared, &text, &mut values)?,
+            Some(_) => {
+                let known = [&["output", "normals", "depth", "input", "size", "keep_parts"], SHARED_FLAGS].concat();
+                return Err(unknown_flag("stitch: ", &text, &known));
+            }
+            None => return Err(UsageError(format!("stitch: unexpected argument '{text}'"))),
+        }
+        values.no_value_left(&text)?;
+    }
+    if stitch.output.is_none() && stitch.normals.is_none() && stitch.depth.is_none() {
+        return Err(UsageError("stitch: nothing to stitch: give -output, -normals or -depth".into()));
+    }
+    Ok(Command::Stitch(stitch))
 }
 
 /// `bench [--quick] [--runs N] [--out DIR] [--corpus DIR]`.
@@ -479,7 +561,10 @@ impl<'a> Values<'a> {
             )));
         }
         if ImageFormat::from_path(&path).is_none() {
-            return Err(UsageError(format!("{flag} {}: unsupported image format, use .tga or .png", path.display())));
+            return Err(UsageError(format!(
+                "{flag} {}: unsupported image format, use .tga, .png or .exr",
+                path.display()
+            )));
         }
         Ok(path)
     }
@@ -538,6 +623,14 @@ impl<'a> Values<'a> {
             }
         }
         Ok(outputs)
+    }
+
+    /// `K/N`: member K (0-based) of N.
+    fn split(&mut self, flag: &str) -> Result<Split, UsageError> {
+        let value = self.take(flag, "K/N")?;
+        let text = value.to_string_lossy();
+        Split::parse(&text)
+            .ok_or_else(|| UsageError(format!("{flag}: '{text}' is not K/N with whole numbers 0 ≤ K < N")))
     }
 
     fn backend(&mut self, flag: &str) -> Result<BackendChoice, UsageError> {
@@ -600,6 +693,7 @@ const RENDER_FLAGS: &[&str] = &[
     "backend",
     "triangle_test",
     "sphere_test",
+    "tile",
     "quiet",
     "verbose",
     "threads",
@@ -655,6 +749,21 @@ fn unknown_flag(context: &str, text: &str, known: &[&str]) -> UsageError {
             UsageError(format!("{context}unknown flag '{text}'; did you mean '{spelled}'?"))
         }
         _ => UsageError(format!("{context}unknown flag '{text}'")),
+    }
+}
+
+/// The commands besides a plain render, for "did you mean".
+const COMMANDS: &[&str] = &["compare", "batch", "bench", "stitch"];
+
+/// A render's argument that is not a flag; the first argument of the line may be a
+/// mistyped command (`stich` → `stitch`).
+fn unexpected_argument(text: &str, first: bool) -> UsageError {
+    let nearest = COMMANDS.iter().map(|c| (strsim::jaro_winkler(text, c), *c)).max_by(|a, b| a.0.total_cmp(&b.0));
+    match nearest {
+        Some((score, command)) if first && score >= 0.85 => {
+            UsageError(format!("unexpected argument '{text}'; did you mean the command '{command}'?"))
+        }
+        _ => UsageError(format!("unexpected argument '{text}': flags start with '-'")),
     }
 }
 
@@ -770,7 +879,7 @@ mod tests {
     fn batch() {
         assert_eq!(
             parse("batch commands.txt --backend gpu"),
-            Ok(Command::Batch { file: "commands.txt".into(), backend: BackendChoice::Gpu })
+            Ok(Command::Batch { file: "commands.txt".into(), backend: BackendChoice::Gpu, shard: None })
         );
         assert!(parse("batch").unwrap_err().0.contains("expects a file"));
         assert!(parse("batch a b").unwrap_err().0.contains("'b'"));
@@ -825,6 +934,10 @@ mod tests {
             ("compare -input s -size 1 1 -output o.tga --max-diff-pixel 2", "did you mean '--max-diff-pixels'?"),
             ("batch c.txt --backedn cpu", "did you mean '--backend'?"),
             ("bench --quik", "did you mean '--quick'?"),
+            ("-input s -size 8 8 -output o.tga --tiel 0/2", "did you mean '--tile'?"),
+            ("batch c.txt --shrad 0/2", "did you mean '--shard'?"),
+            ("stitch -output o.tga --keep-part", "did you mean '--keep-parts'?"),
+            ("stich -output o.tga", "did you mean the command 'stitch'?"),
         ];
         for (line, needle) in cases {
             let err = parse(line).expect_err(line).to_string();

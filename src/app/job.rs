@@ -2,9 +2,11 @@
 
 use crate::app::backend::Backend;
 use crate::app::cli::{Outputs, RenderArgs};
+use crate::app::output::{self, Sink};
 use crate::app::progress::Progress;
+use crate::app::split::{self, Split};
 use raycaster::gpu::{GpuError, RenderStats};
-use raycaster::image_io::{self, ImageError, ImageFile};
+use raycaster::image_io::ImageError;
 use raycaster::metrics::OutputErrors;
 use raycaster::render::RenderOptions;
 use raycaster::scene::{self, Scene, SceneError, SceneWarning};
@@ -20,6 +22,9 @@ pub enum Error {
     Gpu(#[from] GpuError),
     #[error(transparent)]
     Image(#[from] ImageError),
+    /// Identifying a split render's parts (reading the scene's text again).
+    #[error("{0}")]
+    Split(String),
 }
 
 /// The render options a command line implies: only the outputs it names are computed.
@@ -95,8 +100,9 @@ pub fn run(args: &RenderArgs, backend: &Backend, progress: bool) -> Result<Repor
 }
 
 /// Renders an already-loaded scene as `args` asks and writes the images, tile by tile, so
-/// memory stays bounded by the tile whatever the image size. Returns the backend's
-/// statistics, and the milliseconds spent rendering and writing.
+/// memory stays bounded by the tile whatever the image size. With `--tile K/N` only band K
+/// is rendered, into part files. Returns the backend's statistics, and the milliseconds
+/// spent rendering and writing.
 pub fn render_scene(
     scene: &Scene,
     args: &RenderArgs,
@@ -105,27 +111,23 @@ pub fn render_scene(
 ) -> Result<(RenderStats, f64, f64), Error> {
     let start = Instant::now();
     let mut writing = std::time::Duration::ZERO;
-    let bar = Progress::new(progress, args.height as u64, "rows");
     let options = options_for(args);
-    let mut outputs = Vec::new();
-    if let Some(path) = &args.output {
-        outputs.push((ImageFile::create(path, args.width, args.height)?, Kind::Color));
-    }
-    if let Some(path) = &args.normals {
-        outputs.push((ImageFile::create(path, args.width, args.height)?, Kind::Normals));
-    }
-    if let Some(depth) = &args.depth {
-        outputs.push((ImageFile::create(&depth.path, args.width, args.height)?, Kind::Depth(depth.min, depth.max)));
-    }
-    let stats = backend.render_tiles(scene, &options, |_first_row, tile| {
+    let outputs = output::outputs(&args.output, &args.normals, &args.depth);
+    let (first, rows) = args.tile.map_or((0, args.height), |t| t.band(args.height));
+    let mut sinks = match args.tile {
+        None => outputs.iter().map(|o| Sink::image(o, args.width, args.height)).collect::<Result<Vec<_>, _>>()?,
+        Some(tile) => split::part_headers(scene, args, backend, tile, &outputs)
+            .map_err(Error::Split)?
+            .into_iter()
+            .zip(&outputs)
+            .map(|(header, o)| Sink::part(header, o))
+            .collect::<Result<Vec<_>, _>>()?,
+    };
+    let bar = Progress::new(progress, u64::from(rows), "rows");
+    let stats = backend.render_band(scene, &options, first, rows, |_first_row, tile| {
         let written = Instant::now();
-        for (file, kind) in &mut outputs {
-            let rows = match *kind {
-                Kind::Color => image_io::color_image(&tile),
-                Kind::Normals => image_io::normals_image(&tile),
-                Kind::Depth(min, max) => image_io::depth_image(&tile, min, max),
-            };
-            file.write_rows(rows.as_raw())?;
+        for (sink, o) in sinks.iter_mut().zip(&outputs) {
+            sink.write(&o.pixels(&tile))?;
         }
         writing += written.elapsed();
         bar.advance(tile.height as u64);
@@ -134,17 +136,10 @@ pub fn render_scene(
     drop(bar);
     let render_ms = (start.elapsed() - writing).as_secs_f64() * 1e3;
     let finishing = Instant::now();
-    let finished = outputs.into_iter().map(|(file, _)| file.finish()).collect::<Result<Vec<_>, _>>()?;
-    image_io::persist_all(finished)?;
+    let finished = sinks.into_iter().map(Sink::finish).collect::<Result<Vec<_>, _>>()?;
+    raycaster::image_io::persist_all(finished)?;
     let write_ms = (writing + finishing.elapsed()).as_secs_f64() * 1e3;
     Ok((stats, render_ms, write_ms))
-}
-
-/// Which image an output file receives.
-enum Kind {
-    Color,
-    Normals,
-    Depth(f32, f32),
 }
 
 /// What `raycaster compare` found: the GPU against the reference, per output.
@@ -237,25 +232,32 @@ pub struct BatchCount {
     pub failed: usize,
 }
 
-/// Runs each render command line of `text` with `backend`, handing every warning, failure
-/// and finished line to `report` with its line number as it happens. A failing line does not
-/// stop the others. With `progress`, a bar over the lines appears on a terminal when the
-/// batch takes long; it steps aside while `report` prints.
+/// Runs each render command line of `text` with `backend` (with a shard, only its share:
+/// the command lines, blank and comment lines not counted, whose 0-based index is K modulo
+/// N), handing every warning, failure and finished line to `report` with its line number as
+/// it happens. A failing line does not stop the others. With `progress`, a bar over the
+/// lines appears on a terminal when the batch takes long; it steps aside while `report`
+/// prints.
 pub fn run_batch(
     text: &str,
     backend: &Backend,
+    shard: Option<Split>,
     progress: bool,
     mut report: impl FnMut(usize, LineReport),
 ) -> BatchCount {
     let is_command = |line: &&str| line.split_whitespace().next().is_some_and(|w| !w.starts_with('#'));
-    let bar = Progress::new(progress, text.lines().filter(is_command).count() as u64, "lines");
+    let lines: Vec<(usize, &str)> = text
+        .lines()
+        .enumerate()
+        .filter(|(_, line)| is_command(line))
+        .enumerate()
+        .filter(|(command, _)| shard.is_none_or(|s| s.takes(*command)))
+        .map(|(_, (index, line))| (index + 1, line))
+        .collect();
+    let bar = Progress::new(progress, lines.len() as u64, "lines");
     let mut tell = |line: usize, what: LineReport| bar.suspend(|| report(line, what));
     let mut count = BatchCount::default();
-    for (index, line) in text.lines().enumerate() {
-        let line_number = index + 1;
-        if !is_command(&line) {
-            continue;
-        }
+    for (line_number, line) in lines {
         let words: Vec<&str> = line.split_whitespace().collect();
         count.run += 1;
         let failure = match crate::app::cli::parse_args(&words) {

@@ -9,5 +9,7 @@ pub mod bench;
 pub mod cli;
 pub mod exit;
 pub mod job;
+pub mod output;
 pub mod progress;
 pub mod signals;
+pub mod split;

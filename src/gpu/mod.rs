@@ -221,8 +221,22 @@ impl GpuRenderer {
         &self,
         scene: &Scene,
         options: &RenderOptions,
+        on_tile: impl FnMut(u32, Frame) -> Result<(), E>,
+    ) -> Result<RenderStats, E> {
+        self.render_band(scene, options, 0, options.height, on_tile)
+    }
+
+    /// As [`GpuRenderer::render_tiles`], for image rows `first .. first + rows` only (a band
+    /// of a render split across machines); tiles still carry image row numbers.
+    pub fn render_band<E: From<GpuError>>(
+        &self,
+        scene: &Scene,
+        options: &RenderOptions,
+        first: u32,
+        rows: u32,
         mut on_tile: impl FnMut(u32, Frame) -> Result<(), E>,
     ) -> Result<RenderStats, E> {
+        assert!(first + rows <= options.height, "the band lies inside the image");
         let start = std::time::Instant::now();
         let rays = PrimaryRays::new(&scene.camera, options.width, options.height)
             .expect("the parser rejects cameras whose up is parallel to their direction");
@@ -238,7 +252,8 @@ impl GpuRenderer {
             prepare_ms: start.elapsed().as_secs_f64() * 1e3,
             scene_bytes: inputs.bytes(),
         };
-        for (first_row, rows) in row_tiles(options.height, tile_rows) {
+        for (offset, rows) in row_tiles(rows, tile_rows) {
+            let first_row = first + offset;
             let (words, kernel_ns) = self.render_tile(&pipeline, &inputs, buffers.params, &layout, first_row, rows)?;
             stats.kernel_ns = stats.kernel_ns.zip(kernel_ns).map(|(a, b)| a + b);
             stats.tiles += 1;
