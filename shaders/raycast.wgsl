@@ -1,12 +1,12 @@
 // One invocation per pixel: cast the primary ray, keep the closest hit, then write colour,
-// normal and depth (SPEC §3–§5).
+// normal and depth (docs/SPEC.md §3–§5).
 //
 // Coordinates are camera-relative: the host moved the scene so that the camera centre is
 // the origin (in f64, before rounding to f32), so precision does not depend on where the
 // scene sits in the world.
 //
 // Feature switches are `override` constants, not run-time flags: on lavapipe every branch
-// runs whether taken or not (MEASURED.md), while an override set to false removes its code.
+// runs whether taken or not (docs/lavapipe.md), while an override set to false removes its code.
 
 override HAS_SPHERES: bool = true;
 override HAS_ELLIPSOIDS: bool = true;
@@ -16,20 +16,30 @@ override ORTHOGRAPHIC: bool = false;
 override WANT_COLOR: bool = true;
 override WANT_NORMAL: bool = true;
 override WANT_DEPTH: bool = true;
-// Words each pixel takes in `pixels`: the hit flag, then 3 for colour, 3 for the normal and
-// 1 for the depth, each only when asked for (the host's gpu::PixelLayout).
+// Words each pixel takes in `pixels` (the host's gpu::layout::PixelLayout). As floats: the
+// hit flag, then 3 for colour, 3 for the normal and 1 for the depth, each only when asked
+// for. Packed (PACKED_8BIT, for 8-bit images): one word per output asked for.
 override PIXEL_WORDS: u32 = 8u;
+override PACKED_8BIT: bool = false;
 // A loop bound fixed at compile time: no light code for a scene without lights, and the
 // loop unrolled for the rest.
 override NUM_LIGHTS: u32 = 0u;
 override SHADE_BACK: bool = false;
-// Which intersection algorithms to compile (the course asks for methods compared):
-// triangles 0 = Cramer's rule (seed notes), 1 = Möller–Trumbore, 2 = watertight;
-// spheres 0 = the textbook quadratic, 1 = the precise form of Ray Tracing Gems ch. 7.
+// Which intersection algorithms to compile (the course asks for methods compared), one of
+// the TRIANGLE_* and SPHERE_* values below (the host's render::TriangleTest, SphereTest).
 override TRIANGLE_TEST: u32 = 2u;
 override SPHERE_TEST: u32 = 1u;
-// Finite primitives through the bounding volume hierarchy (else flat loops over each kind).
+// Cramer's rule (seed notes), Möller–Trumbore, Woop–Benthin–Wald.
+const TRIANGLE_CRAMER: u32 = 0u;
+const TRIANGLE_MOLLER: u32 = 1u;
+const TRIANGLE_WATERTIGHT: u32 = 2u;
+// The textbook quadratic; the precise form of Ray Tracing Gems ch. 7.
+const SPHERE_NAIVE: u32 = 0u;
+const SPHERE_PRECISE: u32 = 1u;
+// Finite primitives through the bounding volume hierarchy, or through screen-space bins
+// (gpu::binning); else flat loops over each kind.
 override USE_BVH: bool = false;
+override USE_BINS: bool = false;
 
 const F32_MAX: f32 = 3.40282347e38;
 // The "no hit" distance: never less than any closest-so-far.
@@ -42,7 +52,7 @@ const KIND_PLANE: u32 = 3u;
 const KIND_TRIANGLE: u32 = 4u;
 
 struct Params {
-    // The camera (SPEC §3), its extent folded into `horizontal` and `up`; for a
+    // The camera (docs/SPEC.md §3), its extent folded into `horizontal` and `up`; for a
     // perspective camera `direction` is scaled by D = 1/tan(angle/2).
     direction: vec3<f32>,
     width: u32,
@@ -54,7 +64,8 @@ struct Params {
     background: vec3<f32>,
     tile_rows: u32,
     ambient: vec3<f32>,
-    _pad0: u32,
+    // Bins per image row (USE_BINS).
+    bin_columns: u32,
     num_spheres: u32,
     num_ellipsoids: u32,
     num_planes: u32,
@@ -93,7 +104,7 @@ struct Plane {
     _pad2: u32,
 }
 
-// Vertices in world space, ordered so that (v1 − v0) × (v2 − v0) is the SPEC's normal.
+// Vertices in world space, ordered so that (v1 − v0) × (v2 − v0) is the normal of docs/SPEC.md §4.
 struct Triangle {
     v0: vec3<f32>,
     material: u32,
@@ -101,6 +112,23 @@ struct Triangle {
     _pad0: u32,
     v2: vec3<f32>,
     _pad1: u32,
+}
+
+// A triangle for primary rays (gpu::binning::EyeTriangle): three edge planes n · q − w, with
+// q the ray's direction (perspective, all rays from the eye at the origin) or its origin
+// (orthographic, all rays along one direction), and the triangle's plane n · p = w.
+struct EyeTriangle {
+    e0: vec4<f32>,
+    e1: vec4<f32>,
+    e2: vec4<f32>,
+    plane: vec4<f32>,
+}
+
+// A primitive listed in a bin (kind << 30 | index, as prim_refs) and a lower bound of the t
+// at which a primary ray can meet it; a bin's items are sorted by it.
+struct BinItem {
+    reference: u32,
+    near: f32,
 }
 
 struct Light {
@@ -133,6 +161,10 @@ struct BvhNode {
 @group(0) @binding(8) var<storage, read> nodes: array<BvhNode>;
 // kind << 30 | index into that kind's array.
 @group(0) @binding(9) var<storage, read> prim_refs: array<u32>;
+@group(0) @binding(10) var<storage, read> eye_triangles: array<EyeTriangle>;
+// Per bin (8×8 pixels, row by row from the top): first item and count.
+@group(0) @binding(11) var<storage, read> bin_ranges: array<vec2<u32>>;
+@group(0) @binding(12) var<storage, read> bin_items: array<BinItem>;
 
 const REF_TRIANGLE: u32 = 0u;
 const REF_SPHERE: u32 = 1u;
@@ -149,7 +181,7 @@ struct Ray {
 }
 
 // Pixel (i from the left, j from the bottom), sampled at its centre; the longer image side
-// spans the camera's extent and the shorter one is cropped (SPEC §3).
+// spans the camera's extent and the shorter one is cropped (docs/SPEC.md §3).
 fn primary_ray(i: u32, j: u32) -> Ray {
     let longer = f32(max(params.width, params.height));
     let x = (f32(i) + 0.5 - 0.5 * f32(params.width)) / longer;
@@ -176,7 +208,7 @@ fn t_min() -> f32 {
 // centre to the line (no b² − 4ac cancellation when the ray starts far away), and the
 // smaller root from c/q (no −b + √Δ cancellation).
 fn sphere_t(f: vec3<f32>, d: vec3<f32>, radius: f32, tmin: f32) -> f32 {
-    if (SPHERE_TEST == 0u) {
+    if (SPHERE_TEST == SPHERE_NAIVE) {
         return sphere_t_textbook(f, d, radius, tmin);
     }
     return sphere_t_precise(f, d, radius, tmin);
@@ -231,7 +263,7 @@ fn to_unit_sphere_vector(e: Ellipsoid, v: vec3<f32>) -> vec3<f32> {
     return vec3<f32>(dot(e.row0.xyz, v), dot(e.row1.xyz, v), dot(e.row2.xyz, v));
 }
 
-// SPEC §4: the ray goes into object space without renormalising, so t is the world t.
+// docs/SPEC.md §4: the ray goes into object space without renormalising, so t is the world t.
 fn ellipsoid_t(e: Ellipsoid, ray: Ray, tmin: f32) -> f32 {
     return sphere_t(to_unit_sphere_point(e, ray.origin), to_unit_sphere_vector(e, ray.direction), 1.0, tmin);
 }
@@ -286,10 +318,10 @@ fn permute(v: vec3<f32>, k: vec3<u32>) -> vec3<f32> {
 // the +z axis, so an edge shared by two triangles gives both the same value with opposite
 // signs: no ray slips between them. Edges count as inside; both sides of the triangle hit.
 fn triangle_t(tri: Triangle, ray: Ray, shear: Shear, tmin: f32) -> f32 {
-    if (TRIANGLE_TEST == 0u) {
+    if (TRIANGLE_TEST == TRIANGLE_CRAMER) {
         return triangle_t_cramer(tri, ray, tmin);
     }
-    if (TRIANGLE_TEST == 1u) {
+    if (TRIANGLE_TEST == TRIANGLE_MOLLER) {
         return triangle_t_moller(tri, ray, tmin);
     }
     return triangle_t_watertight(tri, ray, shear, tmin);
@@ -373,7 +405,7 @@ struct Closest {
     index: u32,
 }
 
-fn closest_hit(ray: Ray) -> Closest {
+fn closest_hit(ray: Ray, bin: u32) -> Closest {
     let tmin = t_min();
     var best = Closest(NO_HIT, KIND_NONE, 0u);
     // Planes first: infinite, outside the hierarchy, and a near plane hit prunes it.
@@ -385,8 +417,11 @@ fn closest_hit(ray: Ray) -> Closest {
             }
         }
     }
-    // Only the watertight test reads the shear; otherwise the compiler drops it.
+    // Only the watertight test outside bins reads the shear; otherwise the compiler drops it.
     let shear = shear_for(ray.direction);
+    if (USE_BINS) {
+        return walk_bin(bin, ray, shear, tmin, best);
+    }
     if (USE_BVH) {
         return traverse(ray, shear, tmin, best);
     }
@@ -531,6 +566,82 @@ fn traverse(ray: Ray, shear: Shear, tmin: f32, start: Closest) -> Closest {
     return best;
 }
 
+// The edge functions of a primary ray against a triangle's edge planes: all of one sign
+// (or zero) when the ray's line meets the triangle, edges included. Watertight (see
+// gpu::binning::EyeTriangle): a shared edge's plane is negated bit for bit in its two
+// triangles. Then t from the triangle's plane; a ray in that plane never hits. The
+// non-short-circuit & and | keep it free of branches.
+fn eye_triangle_t(tri: EyeTriangle, ray: Ray, tmin: f32) -> f32 {
+    var q = ray.direction;
+    if (ORTHOGRAPHIC) {
+        q = ray.origin;
+    }
+    let e0 = dot(tri.e0.xyz, q) - tri.e0.w;
+    let e1 = dot(tri.e1.xyz, q) - tri.e1.w;
+    let e2 = dot(tri.e2.xyz, q) - tri.e2.w;
+    let inside = ((e0 >= 0.0) & (e1 >= 0.0) & (e2 >= 0.0)) | ((e0 <= 0.0) & (e1 <= 0.0) & (e2 <= 0.0));
+    let denominator = dot(tri.plane.xyz, ray.direction);
+    var numerator = tri.plane.w;
+    if (ORTHOGRAPHIC) {
+        numerator -= dot(tri.plane.xyz, ray.origin);
+    }
+    let t = numerator / select(1.0, denominator, denominator != 0.0);
+    return select(NO_HIT, t_if_above(t, tmin), inside & (denominator != 0.0));
+}
+
+fn try_eye_triangle(k: u32, ray: Ray, tmin: f32, best: Closest) -> Closest {
+    let t = eye_triangle_t(eye_triangles[k], ray, tmin);
+    if (t < best.t) {
+        return Closest(t, KIND_TRIANGLE, k);
+    }
+    return best;
+}
+
+// With bins, the watertight test takes its primary-ray form (the same guarantee, from
+// planes computed once per frame); the other tests stay as they are, to be compared.
+fn try_binned_triangle(k: u32, ray: Ray, shear: Shear, tmin: f32, best: Closest) -> Closest {
+    if (TRIANGLE_TEST == TRIANGLE_WATERTIGHT) {
+        return try_eye_triangle(k, ray, tmin, best);
+    }
+    return try_triangle(k, ray, shear, tmin, best);
+}
+
+fn try_binned(r: u32, ray: Ray, shear: Shear, tmin: f32, best: Closest) -> Closest {
+    // Triangles alone: the reference is the index (REF_TRIANGLE is 0).
+    if (!HAS_SPHERES && !HAS_ELLIPSOIDS) {
+        return try_binned_triangle(r, ray, shear, tmin, best);
+    }
+    let kind = r >> 30u;
+    let index = r & REF_INDEX_MASK;
+    var out = best;
+    if (HAS_TRIANGLES && kind == REF_TRIANGLE) {
+        out = try_binned_triangle(index, ray, shear, tmin, out);
+    }
+    if (HAS_SPHERES && kind == REF_SPHERE) {
+        out = try_sphere(index, ray, tmin, out);
+    }
+    if (HAS_ELLIPSOIDS && kind == REF_ELLIPSOID) {
+        out = try_ellipsoid(index, ray, tmin, out);
+    }
+    return out;
+}
+
+// The closest hit among the primitives listed in this pixel's bin, nearest first: a ray
+// stops once its closest hit is nearer than the next item can be. The list, and so the
+// loop, is the same for every invocation of the workgroup.
+fn walk_bin(bin: u32, ray: Ray, shear: Shear, tmin: f32, start: Closest) -> Closest {
+    var best = start;
+    let range = bin_ranges[bin];
+    for (var k = range.x; k < range.x + range.y; k++) {
+        let item = bin_items[k];
+        if (item.near > best.t) {
+            break;
+        }
+        best = try_binned(item.reference, ray, shear, tmin, best);
+    }
+    return best;
+}
+
 struct Surface {
     normal: vec3<f32>,
     material: u32,
@@ -557,7 +668,7 @@ fn surface_at(hit: Closest, ray: Ray) -> Surface {
     return Surface(vec3<f32>(0.0), 0u);
 }
 
-// SPEC §5: ambient plus Lambert per light; a back-facing hit is black unless SHADE_BACK,
+// docs/SPEC.md §5: ambient plus Lambert per light; a back-facing hit is black unless SHADE_BACK,
 // which shades it with the flipped normal.
 fn shade(surface: Surface, ray: Ray) -> vec3<f32> {
     var n = surface.normal;
@@ -576,8 +687,36 @@ fn shade(surface: Surface, ray: Ray) -> vec3<f32> {
     return color;
 }
 
+// docs/SPEC.md §5: floor(255·clamp(v, 0, 1)) per channel, as image_io::quantize (NaN → 0),
+// packed r | g << 8 | b << 16.
+fn pack_rgb8(c: vec3<f32>) -> u32 {
+    let q = vec3<u32>(floor(255.0 * clamp(select(c, vec3<f32>(0.0), c != c), vec3<f32>(0.0), vec3<f32>(1.0))));
+    return q.x | (q.y << 8u) | (q.z << 16u);
+}
+
+// The 8-bit images, one word each: colour, |N| (black on a miss), and t as bits for the
+// host to quantise in f64 (all ones on a miss).
+fn write_packed_pixel(index: u32, hit: bool, color: vec3<f32>, normal: vec3<f32>, t: f32) {
+    var w = index * PIXEL_WORDS;
+    if (WANT_COLOR) {
+        pixels[w] = pack_rgb8(color);
+        w += 1u;
+    }
+    if (WANT_NORMAL) {
+        pixels[w] = select(0u, pack_rgb8(abs(normal)), hit);
+        w += 1u;
+    }
+    if (WANT_DEPTH) {
+        pixels[w] = select(0xffffffffu, bitcast<u32>(t), hit);
+    }
+}
+
 // Writes one pixel: the hit flag, then only the outputs asked for.
 fn write_pixel(index: u32, hit: bool, color: vec3<f32>, normal: vec3<f32>, t: f32) {
+    if (PACKED_8BIT) {
+        write_packed_pixel(index, hit, color, normal, t);
+        return;
+    }
     var w = index * PIXEL_WORDS;
     pixels[w] = select(0u, 1u, hit);
     w += 1u;
@@ -608,7 +747,8 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     // Image rows count from the top, the camera's j from the bottom.
     let j = params.height - 1u - (params.first_row + row);
     let ray = primary_ray(i, j);
-    let hit = closest_hit(ray);
+    let image_row = params.first_row + row;
+    let hit = closest_hit(ray, (image_row / 8u) * params.bin_columns + i / 8u);
     let index = row * params.width + i;
     if (hit.kind == KIND_NONE) {
         write_pixel(index, false, params.background, vec3<f32>(0.0), 0.0);

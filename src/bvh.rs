@@ -20,7 +20,8 @@
 
 use glam::Vec3;
 
-/// Axis-aligned box in f32 (GPU precision).
+/// Axis-aligned box in f32 (GPU precision); the f64 twin of the scene model is
+/// [`crate::scene::Bounds`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Aabb {
     pub min: Vec3,
@@ -119,10 +120,11 @@ impl Bvh {
     /// Binned SAH build along the longest centroid axis (Wald 2007), root at `nodes[0]`.
     ///
     /// A node becomes a leaf when it has one primitive, or at most [`MAX_LEAF_SIZE`] and the
-    /// SAH prefers a leaf. Otherwise it is split at the best of [`BIN_COUNT`] bins' planes; it
-    /// falls back to a median split (half the primitives each side, ordered along the longest
-    /// centroid axis, any order when the centroids coincide) when the centroids have no extent,
-    /// the box has no area, or the SAH split could make a branch deeper than [`STACK_SIZE`].
+    /// SAH prefers a leaf or has no split to offer. Otherwise it is split at the best of
+    /// `BIN_COUNT` bins' planes; it falls back to a median split (half the primitives each
+    /// side, ordered along the longest centroid axis, any order when the centroids coincide)
+    /// when the centroids have no extent, the box has no area, or the SAH split could make a
+    /// branch deeper than [`STACK_SIZE`].
     /// O(n log n); panics only beyond `u32::MAX` primitives.
     pub fn build(bounds: &[Aabb]) -> Bvh {
         let count = u32::try_from(bounds.len()).expect("at most u32::MAX primitives");
@@ -143,8 +145,8 @@ impl Bvh {
     }
 
     /// Expected cost of a random ray through the root box (MacDonald & Booth): the sum over
-    /// nodes of P(ray hits node | hits root) = area / root area, times [`TRAVERSAL_COST`] for an
-    /// interior node or [`INTERSECTION_COST`] × count for a leaf. 0 when the root box has no
+    /// nodes of P(ray hits node | hits root) = area / root area, times `TRAVERSAL_COST` for an
+    /// interior node or `INTERSECTION_COST` × count for a leaf. 0 when the root box has no
     /// area (empty, or all primitives are points or segments).
     pub fn sah_cost(&self) -> f32 {
         let root_area = self.nodes[0].bounds().surface_area();
@@ -385,8 +387,8 @@ impl Builder<'_> {
 
     /// The cheapest of the planes between [`BIN_COUNT`] equal bins of the centroids' extent
     /// along its longest axis, or `None` when the centroids coincide or the box has no area
-    /// (then the SAH cannot tell splits apart). Cost is relative to testing the node's
-    /// primitives one by one: TRAVERSAL_COST + INTERSECTION_COST · Σ (area · count) / area.
+    /// (then the SAH cannot tell splits apart). The cost is in the units of a leaf's
+    /// `INTERSECTION_COST · count`: TRAVERSAL_COST + INTERSECTION_COST · Σ (area · count) / area.
     fn best_binned_split(&self, start: usize, end: usize, bounds: &Aabb, centroids: &Aabb) -> Option<SahSplit> {
         let area = bounds.surface_area();
         let axis = (centroids.max - centroids.min).max_position();

@@ -1,7 +1,8 @@
-//! Primary rays (SPEC §3): where pixel (i, j) looks from and in which direction.
+//! Primary rays (docs/SPEC.md §3): where pixel (i, j) looks from and in which direction.
 //!
 //! The CPU reference calls [`PrimaryRays::ray`] per pixel in f64; the GPU backend uploads
-//! the same [`PrimaryRays`] (converted to f32) and the kernel repeats the arithmetic.
+//! the same `direction`, `horizontal` and `up` (in f32, with the scene moved so that
+//! `center` is the origin) and the kernel repeats the arithmetic.
 
 use crate::scene::{Camera, Projection};
 use glam::DVec3;
@@ -10,6 +11,9 @@ use glam::DVec3;
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PrimaryRays {
     pub center: DVec3,
+    /// The camera's unit direction for orthographic rays; for perspective ones, the vector
+    /// from the eye to the centre of the image plane, the unit direction times
+    /// `D = 1/tan(angle/2)`.
     pub direction: DVec3,
     /// `horizontal` and `up` already scaled so that the screen coordinate −½…½ across the
     /// longer image side spans the camera's extent (`size` for orthographic, `2` at
@@ -21,7 +25,10 @@ pub struct PrimaryRays {
     pub height: u32,
 }
 
-/// A ray in world space; `direction` is unit length.
+/// A ray `origin + t·direction`. `direction` need not be unit length: primary rays have
+/// unit directions (in world space, so that `t` is a distance), but the reference carries a
+/// ray into a Transform's object space as `(M⁻¹·o, M⁻¹·d)` without renormalising, so that
+/// `t` stays the world `t` (docs/SPEC.md §4).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Ray {
     pub origin: DVec3,
@@ -29,16 +36,16 @@ pub struct Ray {
 }
 
 impl PrimaryRays {
-    /// Resolves `camera` for a `width × height` image. The parser guarantees the camera has
-    /// a basis (up not parallel to direction); a degenerate one yields `None`.
-    pub fn new(camera: &Camera, width: u32, height: u32) -> Option<PrimaryRays> {
-        let basis = camera.basis()?;
+    /// Resolves `camera` for a `width × height` image. Cannot fail: a [`Camera`] always has
+    /// a frame (validated when the scene was read).
+    pub fn for_camera(camera: &Camera, width: u32, height: u32) -> PrimaryRays {
+        let basis = camera.frame();
         let (orthographic, extent, direction) = match camera.projection {
             Projection::Orthographic { size } => (true, size, basis.direction),
             // Seed notes: the image plane sits at D = 1/tan(angle/2) and spans −1…1.
             Projection::Perspective { angle } => (false, 2.0, basis.direction / (angle / 2.0).tan()),
         };
-        Some(PrimaryRays {
+        PrimaryRays {
             center: camera.center,
             direction,
             horizontal: basis.horizontal * extent,
@@ -46,12 +53,12 @@ impl PrimaryRays {
             orthographic,
             width,
             height,
-        })
+        }
     }
 
     /// Screen coordinates of the centre of pixel (i from the left, j from the bottom),
     /// each in −½…½ along the longer side; the shorter side is cropped symmetrically so that
-    /// pixels stay square (SPEC §3).
+    /// pixels stay square (docs/SPEC.md §3).
     pub fn screen(&self, i: u32, j: u32) -> (f64, f64) {
         let longer = self.width.max(self.height) as f64;
         let x = (i as f64 + 0.5 - self.width as f64 / 2.0) / longer;

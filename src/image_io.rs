@@ -1,4 +1,4 @@
-//! From float frames to 8-bit images (SPEC §5), and image files written atomically.
+//! From float frames to 8-bit images (docs/SPEC.md §5), and image files written atomically.
 //!
 //! Every channel is clamped to [0, 1] and stored as `floor(255·v)`: truncation, as the
 //! course's own images are made.
@@ -13,7 +13,7 @@ use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 use std::sync::{Mutex, MutexGuard, PoisonError};
 
-/// SPEC §5: `floor(255·clamp(v, 0, 1))`. NaN becomes 0.
+/// docs/SPEC.md §5: `floor(255·clamp(v, 0, 1))`. NaN becomes 0.
 pub fn quantize(v: f32) -> u8 {
     if v.is_nan() {
         return 0;
@@ -34,15 +34,14 @@ pub fn normals_image(frame: &Frame) -> RgbImage {
 /// The depth visualisation (`-depth MIN MAX`): grey `(MAX − t)/(MAX − MIN)`, near = white,
 /// black where nothing was hit.
 pub fn depth_image(frame: &Frame, min: f32, max: f32) -> RgbImage {
-    image_from(frame, |k| {
-        if frame.hit[k] {
-            // f64 so that MIN and MAX far from zero do not lose the depth's low digits.
-            let v = (max as f64 - frame.depth[k] as f64) / (max as f64 - min as f64);
-            [quantize(v as f32); 3]
-        } else {
-            [0; 3]
-        }
-    })
+    image_from(frame, |k| if frame.hit[k] { [depth_level(frame.depth[k], min, max); 3] } else { [0; 3] })
+}
+
+/// The grey level of a hit at distance `t` in the depth visualisation `-depth MIN MAX`.
+pub fn depth_level(t: f32, min: f32, max: f32) -> u8 {
+    // f64 so that MIN and MAX far from zero do not lose the depth's low digits.
+    let v = (max as f64 - t as f64) / (max as f64 - min as f64);
+    quantize(v as f32)
 }
 
 fn image_from(frame: &Frame, pixel: impl Fn(usize) -> [u8; 3]) -> RgbImage {

@@ -186,7 +186,7 @@ impl Stats {
 }
 
 /// The hit distances' range in `frame` (for a depth image that covers what is visible);
-/// a unit range around the single depth if there is only one, (0, 1) if nothing was hit.
+/// the depth ± 1 if every hit has the same depth, (0, 1) if nothing was hit.
 pub fn depth_range_of(frame: &Frame) -> (f32, f32) {
     let hits = frame.depth.iter().zip(&frame.hit).filter(|(_, &h)| h).map(|(&t, _)| t);
     let (lo, hi) = hits.fold((f32::MAX, f32::MIN), |(lo, hi), t| (lo.min(t), hi.max(t)));

@@ -2,9 +2,9 @@
 //!
 //! Both backends fill a [`Frame`] of float buffers (before any quantisation), so the two can
 //! be compared on the numbers themselves, and [`crate::image_io`] turns a frame into the
-//! 8-bit images of SPEC §5 the same way for both.
+//! 8-bit images of docs/SPEC.md §5 the same way for both.
 
-/// Which images to produce and how (SPEC §1).
+/// Which images to produce and how (docs/SPEC.md §1).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RenderOptions {
     pub width: u32,
@@ -106,8 +106,18 @@ pub struct Frame {
     pub depth: Vec<f32>,
 }
 
+/// What a render computes for one pixel, as stored in a [`Frame`]: zero for what was not
+/// asked for, and normal and depth zero where nothing was hit.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Pixel {
+    pub hit: bool,
+    pub color: [f32; 3],
+    pub normal: [f32; 3],
+    pub depth: f32,
+}
+
 impl Frame {
-    /// An empty frame with buffers sized for what `options` asks for.
+    /// A frame with buffers sized for what `options` asks for, every pixel a miss and zero.
     pub fn new(options: &RenderOptions) -> Frame {
         let n = options.pixel_count();
         Frame {
@@ -117,6 +127,48 @@ impl Frame {
             color: if options.color { vec![[0.0; 3]; n] } else { Vec::new() },
             normal: if options.normals { vec![[0.0; 3]; n] } else { Vec::new() },
             depth: if options.depth { vec![0.0; n] } else { Vec::new() },
+        }
+    }
+
+    /// The `options.width × options.height` frame of `pixels`, row by row from the top,
+    /// keeping the outputs `options` asks for (the other buffers stay empty).
+    ///
+    /// # Panics
+    /// If there are not exactly `options.pixel_count()` pixels.
+    pub fn from_pixels(options: &RenderOptions, pixels: impl IntoIterator<Item = Pixel>) -> Frame {
+        let n = options.pixel_count();
+        let capacity = |wanted: bool| if wanted { n } else { 0 };
+        let mut frame = Frame {
+            width: options.width,
+            height: options.height,
+            hit: Vec::with_capacity(n),
+            color: Vec::with_capacity(capacity(options.color)),
+            normal: Vec::with_capacity(capacity(options.normals)),
+            depth: Vec::with_capacity(capacity(options.depth)),
+        };
+        for pixel in pixels {
+            frame.hit.push(pixel.hit);
+            if options.color {
+                frame.color.push(pixel.color);
+            }
+            if options.normals {
+                frame.normal.push(pixel.normal);
+            }
+            if options.depth {
+                frame.depth.push(pixel.depth);
+            }
+        }
+        assert_eq!(frame.hit.len(), n, "a {}×{} frame needs {n} pixels", options.width, options.height);
+        frame
+    }
+
+    /// Pixel `k` (counted row by row from the top), zero in the outputs the frame lacks.
+    pub fn pixel(&self, k: usize) -> Pixel {
+        Pixel {
+            hit: self.hit[k],
+            color: self.color.get(k).copied().unwrap_or_default(),
+            normal: self.normal.get(k).copied().unwrap_or_default(),
+            depth: self.depth.get(k).copied().unwrap_or_default(),
         }
     }
 }

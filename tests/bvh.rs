@@ -667,15 +667,15 @@ fn one_point_three_million_triangles() {
 /// the same normals. Ties (two primitives at exactly the same t) may pick either.
 #[test]
 fn gpu_hierarchy_matches_flat_loops() {
-    use raycaster::gpu::GpuRenderer;
+    use raycaster::gpu::GpuOptions;
     use raycaster::render::RenderOptions;
     if common::gpu().is_none() {
         return;
     }
-    let mut flat = GpuRenderer::new().unwrap();
-    flat.set_bvh_min_primitives(usize::MAX);
-    let mut forced = GpuRenderer::new().unwrap();
-    forced.set_bvh_min_primitives(1);
+    let gpu = common::gpu().unwrap();
+    let with_bvh_from = |count| gpu.on_same_device(GpuOptions { bvh_min_primitives: count, ..GpuOptions::default() });
+    let flat = with_bvh_from(usize::MAX);
+    let forced = with_bvh_from(1);
     let mut scenes: Vec<(String, raycaster::scene::Scene, Option<tempfile::TempDir>)> = vec![
         {
             let (dir, scene) = common::hard::load_hard_ok("closed_mesh_inside.txt");

@@ -514,10 +514,10 @@ fn wait_for_temporary_files(child: &std::process::Child, dir: &Path, count: usiz
     }
 }
 
-/// About 1.5 million pixels of the octahedron on one CPU thread: a few seconds here, well past
+/// About 9 million pixels of the octahedron on one CPU thread: a few seconds here, well past
 /// the second after which a progress bar may appear.
 fn long_render(out: &Path) -> Vec<String> {
-    ["--threads", "1", "--backend", "cpu", "-input", "scenes/mesh_octahedron.txt", "-size", "1200", "1200", "-output"]
+    ["--threads", "1", "--backend", "cpu", "-input", "scenes/mesh_octahedron.txt", "-size", "3000", "3000", "-output"]
         .iter()
         .map(|s| s.to_string())
         .chain([path_str(out).to_string()])
@@ -556,7 +556,7 @@ fn a_long_render_on_a_terminal_shows_progress_unless_quiet() {
         String::from_utf8_lossy(&result.stdout).into_owned()
     };
     let shown = on_terminal("");
-    assert!(shown.contains("/1200 rows, ") && shown.contains("/s, ") && shown.contains(" left"), "{shown:?}");
+    assert!(shown.contains("/3000 rows, ") && shown.contains("/s, ") && shown.contains(" left"), "{shown:?}");
     let quiet = on_terminal("-q");
     assert_eq!(quiet, "", "-q printed on the terminal");
 }

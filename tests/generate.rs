@@ -79,7 +79,7 @@ type Variant = (&'static str, &'static [&'static str], fn(DVec3) -> DVec3);
 /// the rays' (x, y) by pixel.
 fn pixel_centres_64(scene: &Scene) -> Vec<Centre> {
     assert_eq!(scene.camera.projection, Projection::Orthographic { size: 64.0 });
-    let rays = PrimaryRays::new(&scene.camera, 64, 64).unwrap();
+    let rays = PrimaryRays::for_camera(&scene.camera, 64, 64);
     let mut out = Vec::with_capacity(64 * 64);
     for j in 0..64 {
         for i in 0..64 {

@@ -3,8 +3,12 @@
 //! twin, so a field added on one side only cannot silently shift the others.
 
 use raycaster::bvh::BvhNode;
-use raycaster::gpu::buffers::{GpuEllipsoid, GpuLight, GpuPlane, GpuSphere, GpuTriangle, Params};
+use raycaster::gpu::layout::{
+    BinItem, EyeTriangle, GpuEllipsoid, GpuLight, GpuPlane, GpuSphere, GpuTriangle, Params, PixelLayout,
+};
 use raycaster::gpu::SHADER_SOURCE;
+use raycaster::gpu::{KernelConfig, BINDINGS};
+use raycaster::render::{SphereTest, TriangleTest};
 use std::mem::{offset_of, size_of};
 
 fn module() -> naga::Module {
@@ -59,6 +63,7 @@ fn host_structs_match_the_shader() {
             ("background", offset_of!(Params, background)),
             ("tile_rows", offset_of!(Params, tile_rows)),
             ("ambient", offset_of!(Params, ambient)),
+            ("bin_columns", offset_of!(Params, bin_columns)),
             ("num_spheres", offset_of!(Params, num_spheres)),
             ("num_ellipsoids", offset_of!(Params, num_ellipsoids)),
             ("num_planes", offset_of!(Params, num_planes)),
@@ -115,6 +120,23 @@ fn host_structs_match_the_shader() {
     );
     check(
         &m,
+        "EyeTriangle",
+        size_of::<EyeTriangle>(),
+        &[
+            ("e0", offset_of!(EyeTriangle, edges)),
+            ("e1", offset_of!(EyeTriangle, edges) + 16),
+            ("e2", offset_of!(EyeTriangle, edges) + 32),
+            ("plane", offset_of!(EyeTriangle, plane)),
+        ],
+    );
+    check(
+        &m,
+        "BinItem",
+        size_of::<BinItem>(),
+        &[("reference", offset_of!(BinItem, reference)), ("near", offset_of!(BinItem, near))],
+    );
+    check(
+        &m,
         "BvhNode",
         size_of::<BvhNode>(),
         &[
@@ -126,34 +148,83 @@ fn host_structs_match_the_shader() {
     );
 }
 
-/// Each binding's array stride equals the size of the Rust element uploaded to it
-/// (materials travel as `array<vec4<f32>>`, i.e. `[f32; 4]`).
+/// The host's binding table (`gpu::BINDINGS`, from which the bind-group layout and every
+/// bind group are built) is the shader's: the same variable at each `@binding`, no more and
+/// no fewer, written by the kernel exactly where the table says so, with elements of the size
+/// the host uploads (an array's stride, or a struct's size).
 #[test]
-fn binding_strides_match() {
+fn binding_table_matches_the_shader() {
     let m = module();
-    let expected = [
-        (1, size_of::<GpuSphere>()),
-        (2, size_of::<GpuEllipsoid>()),
-        (3, size_of::<GpuPlane>()),
-        (4, size_of::<GpuTriangle>()),
-        (5, size_of::<[f32; 4]>()),
-        (6, size_of::<GpuLight>()),
-        (7, size_of::<u32>()),
-        (8, size_of::<BvhNode>()),
-        (9, size_of::<u32>()),
+    let mut shader: Vec<(u32, String, bool, u32)> = m
+        .global_variables
+        .iter()
+        .filter_map(|(_, v)| {
+            let binding = v.binding.as_ref()?;
+            assert_eq!(binding.group, 0, "{:?}", v.name);
+            let writable = match v.space {
+                naga::AddressSpace::Storage { access } => access.contains(naga::StorageAccess::STORE),
+                ref other => panic!("{:?} is not a storage buffer: {other:?}", v.name),
+            };
+            let element = match m.types[v.ty].inner {
+                naga::TypeInner::Array { stride, .. } => stride,
+                naga::TypeInner::Struct { span, .. } => span,
+                ref other => panic!("{:?}: unexpected type {other:?}", v.name),
+            };
+            Some((binding.binding, v.name.clone().unwrap_or_default(), writable, element))
+        })
+        .collect();
+    shader.sort();
+    let host: Vec<(u32, String, bool, u32)> = BINDINGS
+        .iter()
+        .enumerate()
+        .map(|(k, b)| (k as u32, b.name.to_string(), b.writable, b.element_bytes as u32))
+        .collect();
+    assert_eq!(shader, host);
+}
+
+/// Every `override` the kernel declares is set by the host, and the host sets no other: a
+/// constant renamed on one side only would otherwise be silently left at its default (or
+/// fail pipeline creation at run time).
+#[test]
+fn override_constants_match_the_host() {
+    let m = module();
+    let mut shader: Vec<String> = m.overrides.iter().filter_map(|(_, o)| o.name.clone()).collect();
+    shader.sort();
+    let config = KernelConfig {
+        has_spheres: true,
+        has_ellipsoids: true,
+        has_planes: true,
+        has_triangles: true,
+        orthographic: false,
+        pixel_layout: PixelLayout { color: true, normal: true, depth: true, packed: false },
+        num_lights: 1,
+        shade_back: false,
+        triangle_test: TriangleTest::Watertight,
+        sphere_test: SphereTest::Robust,
+        use_bvh: false,
+        use_bins: false,
+    };
+    let mut host: Vec<String> = config.constants().iter().map(|(name, _)| name.to_string()).collect();
+    host.sort();
+    assert_eq!(shader, host);
+}
+
+/// The values the host passes for `TRIANGLE_TEST` and `SPHERE_TEST` name the same algorithms
+/// in the shader (its `TRIANGLE_*` and `SPHERE_*` constants, which its dispatchers compare
+/// against).
+#[test]
+fn algorithm_values_match_the_shader() {
+    let m = module();
+    let triangle = [
+        ("TRIANGLE_CRAMER", TriangleTest::Cramer),
+        ("TRIANGLE_MOLLER", TriangleTest::Moller),
+        ("TRIANGLE_WATERTIGHT", TriangleTest::Watertight),
     ];
-    for (binding, rust_size) in expected {
-        let (_, var) = m
-            .global_variables
-            .iter()
-            .find(|(_, v)| v.binding.as_ref().map(|b| (b.group, b.binding)) == Some((0, binding)))
-            .unwrap_or_else(|| panic!("no binding {binding}"));
-        match m.types[var.ty].inner {
-            naga::TypeInner::Array { stride, .. } => {
-                assert_eq!(stride as usize, rust_size, "stride of binding {binding}")
-            }
-            ref other => panic!("binding {binding} is not an array: {other:?}"),
-        }
+    for (name, test) in triangle {
+        assert_eq!(shader_constant(&m, name), naga::Literal::U32(test as u32), "{name}");
+    }
+    for (name, test) in [("SPHERE_NAIVE", SphereTest::Naive), ("SPHERE_PRECISE", SphereTest::Robust)] {
+        assert_eq!(shader_constant(&m, name), naga::Literal::U32(test as u32), "{name}");
     }
 }
 
@@ -182,9 +253,9 @@ fn bvh_constants_match_the_builder() {
         other => panic!("{other:?}"),
     }
     let refs = [
-        ("REF_TRIANGLE", raycaster::gpu::buffers::REF_TRIANGLE),
-        ("REF_SPHERE", raycaster::gpu::buffers::REF_SPHERE),
-        ("REF_ELLIPSOID", raycaster::gpu::buffers::REF_ELLIPSOID),
+        ("REF_TRIANGLE", raycaster::gpu::layout::REF_TRIANGLE),
+        ("REF_SPHERE", raycaster::gpu::layout::REF_SPHERE),
+        ("REF_ELLIPSOID", raycaster::gpu::layout::REF_ELLIPSOID),
     ];
     for (name, value) in refs {
         assert_eq!(shader_constant(&m, name), naga::Literal::U32(value), "{name}");

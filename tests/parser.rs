@@ -109,7 +109,7 @@ fn all_sixteen_course_scenes_parse() {
     assert_eq!(names.len(), 16);
     for name in &names {
         let scene = course_scene(name);
-        assert!(scene.camera.basis().is_some(), "{name}");
+        assert!(orthonormal(scene.camera.frame()), "{name}");
         assert!(!scene.lights.is_empty(), "{name}");
         assert!(!scene.root.is_empty(), "{name}");
         assert!(scene.warnings.is_empty(), "{name}: {:?}", scene.warnings);
@@ -1084,7 +1084,7 @@ proptest! {
             apply(&mut words, edit);
         }
         match parse_scene(&words.join(" "), &course_dir().join("mutated.txt")) {
-            Ok(scene) => prop_assert!(scene.camera.basis().is_some()),
+            Ok(scene) => prop_assert!(orthonormal(scene.camera.frame())),
             Err(error) => prop_assert!(error.location.is_some() || error.message.contains("camera")),
         }
     }
@@ -1100,4 +1100,16 @@ proptest! {
             prop_assert!(mesh.triangles.iter().flatten().all(|&i| (i as usize) < n));
         }
     }
+}
+
+/// The camera frame the parser validated: unit, mutually orthogonal axes.
+fn orthonormal(frame: &raycaster::scene::CameraBasis) -> bool {
+    let unit = |v: glam::DVec3| (v.length() - 1.0).abs() < 1e-12;
+    let orthogonal = |a: glam::DVec3, b: glam::DVec3| a.dot(b).abs() < 1e-12;
+    unit(frame.direction)
+        && unit(frame.up)
+        && unit(frame.horizontal)
+        && orthogonal(frame.direction, frame.up)
+        && orthogonal(frame.direction, frame.horizontal)
+        && orthogonal(frame.up, frame.horizontal)
 }

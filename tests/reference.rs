@@ -119,12 +119,12 @@ fn non_square_images_crop_the_shorter_side() {
         "OrthographicCamera { center 0 0 0 direction 0 0 -1 up 0 1 0 size 4 }
          Group { numObjects 0 }",
     );
-    let rays = PrimaryRays::new(&s.camera, 4, 2).unwrap();
+    let rays = PrimaryRays::for_camera(&s.camera, 4, 2);
     assert_eq!(rays.ray(0, 0).origin, DVec3::new(-1.5, -0.5, 0.0));
     assert_eq!(rays.ray(3, 1).origin, DVec3::new(1.5, 0.5, 0.0));
 }
 
-/// A triangle under a mirroring transform keeps the normal normalise(M⁻ᵀ·n) of docs/SPEC.md §4.
+/// A triangle under a mirroring transform keeps the normal of docs/SPEC.md §4, normalise(M⁻ᵀ·n).
 #[test]
 fn mirrored_triangle_normal_follows_the_inverse_transpose() {
     let s = scene(

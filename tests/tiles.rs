@@ -2,7 +2,7 @@
 
 mod common;
 
-use raycaster::gpu::GpuRenderer;
+use raycaster::gpu::GpuOptions;
 use raycaster::image_io::{color_image, read_image, ImageFile};
 use raycaster::render::RenderOptions;
 use raycaster::scene::load_scene;
@@ -19,8 +19,8 @@ fn gpu_tiles_equal_one_pass() {
     }
     let options = RenderOptions::all(37, 23);
     let whole = common::gpu().unwrap().render(&scene(), &options).unwrap();
-    let mut small = GpuRenderer::new().unwrap();
-    small.set_max_tile_bytes(37 * 3 * 32);
+    let small =
+        common::gpu().unwrap().on_same_device(GpuOptions { max_tile_bytes: 37 * 3 * 32, ..GpuOptions::default() });
     let mut tiles = 0;
     let mut rows_seen = Vec::new();
     small

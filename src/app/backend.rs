@@ -1,8 +1,10 @@
 //! Choosing and calling a renderer: the GPU kernel or the f64 CPU reference.
 
 use crate::app::cli::BackendChoice;
+use crate::app::output::Kind;
 use raycaster::cpu::Reference;
 use raycaster::gpu::{GpuError, GpuRenderer, RenderStats};
+use raycaster::image_io;
 use raycaster::render::{row_tiles, Frame, RenderOptions};
 use raycaster::scene::Scene;
 
@@ -68,5 +70,61 @@ impl Backend {
                 Ok(stats)
             }
         }
+    }
+
+    /// Renders the 8-bit images `options` asks for (the depth visualisation over
+    /// `depth_range`) for image rows `first .. first + rows` (the whole image, or one band of
+    /// a split render), in tiles of full rows, top first. On the GPU the kernel quantises,
+    /// so only the bytes of the images cross from the device.
+    pub fn render_images<E: From<GpuError>>(
+        &self,
+        scene: &Scene,
+        options: &RenderOptions,
+        depth_range: (f32, f32),
+        (first, rows): (u32, u32),
+        mut on_tile: impl FnMut(u32, ImageRows) -> Result<(), E>,
+    ) -> Result<RenderStats, E> {
+        let (min, max) = depth_range;
+        match self {
+            Backend::Gpu(gpu) => gpu.prepare(scene, options, true)?.render_band(first, rows, |tile| {
+                let rows = ImageRows {
+                    rows: tile.rows,
+                    color: options.color.then(|| tile.color_rgb()),
+                    normals: options.normals.then(|| tile.normals_rgb()),
+                    depth: options.depth.then(|| tile.depth_rgb(min, max)),
+                };
+                on_tile(tile.first_row, rows)
+            }),
+            Backend::Cpu => self.render_band(scene, options, first, rows, |first_row, frame| {
+                let rows = ImageRows {
+                    rows: frame.height,
+                    color: options.color.then(|| image_io::color_image(&frame).into_raw()),
+                    normals: options.normals.then(|| image_io::normals_image(&frame).into_raw()),
+                    depth: options.depth.then(|| image_io::depth_image(&frame, min, max).into_raw()),
+                };
+                on_tile(first_row, rows)
+            }),
+        }
+    }
+}
+
+/// One tile's rows of each 8-bit image asked for, RGB, top row first.
+pub struct ImageRows {
+    /// How many rows the tile has.
+    pub rows: u32,
+    pub color: Option<Vec<u8>>,
+    pub normals: Option<Vec<u8>>,
+    pub depth: Option<Vec<u8>>,
+}
+
+impl ImageRows {
+    /// The rows of the image of `kind`, once (each kind is asked for at most once).
+    pub fn take(&mut self, kind: Kind) -> Vec<u8> {
+        let rows = match kind {
+            Kind::Color => &mut self.color,
+            Kind::Normals => &mut self.normals,
+            Kind::Depth { .. } => &mut self.depth,
+        };
+        rows.take().expect("the render computed every output asked for")
     }
 }

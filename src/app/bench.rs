@@ -9,10 +9,12 @@
 
 use glam::DVec3;
 use raycaster::cpu::Reference;
-use raycaster::gpu::{GpuError, GpuRenderer};
+use raycaster::gpu::{Acceleration, GpuError, GpuOptions, GpuRenderer};
 use raycaster::metrics::{compare_frames, depth_range_of, Output, OutputErrors};
-use raycaster::render::{Frame, RenderOptions, TriangleTest};
-use raycaster::scene::{self, Background, Camera, DirectionalLight, Material, Mesh, Object, Projection, Scene, Shape};
+use raycaster::render::{Frame, Pixel, RenderOptions, TriangleTest};
+use raycaster::scene::{
+    self, Background, Bounds, Camera, DirectionalLight, Material, Mesh, Object, Projection, Scene, Shape,
+};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -25,6 +27,7 @@ pub struct Case {
     pub width: u32,
     pub height: u32,
     pub triangle_test: TriangleTest,
+    pub acceleration: Acceleration,
 }
 
 /// What one case measured.
@@ -32,6 +35,7 @@ pub struct Case {
 pub struct Row {
     pub name: String,
     pub triangle_test: TriangleTest,
+    pub acceleration: Acceleration,
     pub primitives: usize,
     pub triangles: usize,
     pub width: u32,
@@ -105,6 +109,7 @@ impl Row {
 /// Measures `case` with `runs` renders (at least 1).
 pub fn run_case(gpu: &GpuRenderer, case: &Case, runs: usize) -> Result<Row, GpuError> {
     let options = RenderOptions { triangle_test: case.triangle_test, ..RenderOptions::all(case.width, case.height) };
+    let gpu = &gpu.on_same_device(GpuOptions { acceleration: case.acceleration, ..*gpu.options() });
     let counts = case.scene.primitive_counts();
     let sampler = Sampler::new(options.width, options.height, sample_budget(counts.triangles));
     reset_peak_memory();
@@ -112,6 +117,7 @@ pub fn run_case(gpu: &GpuRenderer, case: &Case, runs: usize) -> Result<Row, GpuE
     let mut wall = Vec::new();
     let mut timestamps = false;
     let mut bvh_build_ms = None;
+    let mut used = case.acceleration;
     let mut scene_bytes = 0;
     let mut gpu_samples = Vec::new();
     for run in 0..runs.max(1) {
@@ -126,6 +132,7 @@ pub fn run_case(gpu: &GpuRenderer, case: &Case, runs: usize) -> Result<Row, GpuE
         wall.push(elapsed);
         timestamps = stats.kernel_ns.is_some();
         bvh_build_ms = bvh_build_ms.or(stats.bvh_build_ms);
+        used = stats.acceleration;
         scene_bytes = stats.scene_bytes;
         kernel.push(stats.kernel_ns.map_or(elapsed, |ns| ns as f64 / 1e6));
     }
@@ -136,6 +143,7 @@ pub fn run_case(gpu: &GpuRenderer, case: &Case, runs: usize) -> Result<Row, GpuE
     Ok(Row {
         name: case.name.clone(),
         triangle_test: case.triangle_test,
+        acceleration: used,
         primitives: counts.total(),
         triangles: counts.triangles,
         width: case.width,
@@ -166,10 +174,7 @@ struct Sampler {
 
 struct Sample {
     position: (u32, u32),
-    hit: bool,
-    color: [f32; 3],
-    normal: [f32; 3],
-    depth: f32,
+    pixel: Pixel,
 }
 
 impl Sampler {
@@ -191,25 +196,18 @@ impl Sampler {
             }
             for i in (0..self.width).filter(|&i| self.picks(i)) {
                 let k = (r * self.width + i) as usize;
-                into.push(Sample {
-                    position: (i, row),
-                    hit: tile.hit[k],
-                    color: tile.color[k],
-                    normal: tile.normal[k],
-                    depth: tile.depth[k],
-                });
+                into.push(Sample { position: (i, row), pixel: tile.pixel(k) });
             }
         }
     }
 }
 
+/// The samples as a one-row frame, in their order.
 fn samples_frame(options: &RenderOptions, samples: &[Sample]) -> Frame {
-    let mut frame = Frame::new(&RenderOptions { width: samples.len() as u32, height: 1, ..*options });
-    frame.hit = samples.iter().map(|s| s.hit).collect();
-    frame.color = samples.iter().map(|s| s.color).collect();
-    frame.normal = samples.iter().map(|s| s.normal).collect();
-    frame.depth = samples.iter().map(|s| s.depth).collect();
-    frame
+    Frame::from_pixels(
+        &RenderOptions { width: samples.len() as u32, height: 1, ..*options },
+        samples.iter().map(|s| s.pixel),
+    )
 }
 
 fn median(values: &mut [f64]) -> f64 {
@@ -240,20 +238,20 @@ pub fn peak_memory_mib() -> f64 {
 /// A scene that frames `mesh`: a perspective camera in front of its bounding box (+z side),
 /// one white light from the upper left, grey material.
 pub fn mesh_scene(name: &str, mesh: Mesh) -> Scene {
-    let lo = mesh.positions.iter().fold(DVec3::INFINITY, |a, &p| a.min(p));
-    let hi = mesh.positions.iter().fold(DVec3::NEG_INFINITY, |a, &p| a.max(p));
+    let Bounds { min: lo, max: hi } = mesh.bounds();
     let (center, radius) = ((lo + hi) / 2.0, ((hi - lo).length() / 2.0).max(1e-9));
     let angle: f64 = 40f64.to_radians();
     let distance = radius / (angle / 2.0).sin();
     Scene {
         path: PathBuf::from(name),
-        camera: Camera {
-            projection: Projection::Perspective { angle },
-            center: center + DVec3::new(0.0, 0.0, distance),
-            direction: DVec3::new(0.0, 0.0, -1.0),
-            up: DVec3::Y,
-            location: Default::default(),
-        },
+        camera: Camera::new(
+            Projection::Perspective { angle },
+            center + DVec3::new(0.0, 0.0, distance),
+            DVec3::new(0.0, 0.0, -1.0),
+            DVec3::Y,
+            Default::default(),
+        )
+        .expect("up (+y) is orthogonal to direction (−z)"),
         lights: vec![DirectionalLight { direction: DVec3::new(-0.5, -0.5, -1.0), color: DVec3::splat(0.9) }],
         background: Background { color: DVec3::splat(0.2), ambient: DVec3::splat(0.1) },
         materials: vec![Material { diffuse: DVec3::splat(0.8) }],
@@ -277,6 +275,7 @@ pub fn standard_cases(corpus: &Path, quick: bool) -> Result<Vec<Case>, scene::Sc
         width: size,
         height: size,
         triangle_test: TriangleTest::default(),
+        acceleration: Acceleration::Auto,
     };
     let mut cases = Vec::new();
     if quick {
@@ -313,14 +312,22 @@ pub fn standard_cases(corpus: &Path, quick: bool) -> Result<Vec<Case>, scene::Sc
         cases.push(case(name, mesh(name, path)?, 512));
     }
     let sphere = scene::generate::icosphere(DVec3::ZERO, 1.0, 8);
-    let name = format!("icosphere_{}", sphere.triangles.len());
-    cases.push(case(&name, mesh_scene(&name, sphere), 512));
+    let icosphere_name = format!("icosphere_{}", sphere.triangles.len());
+    let icosphere = mesh_scene(&icosphere_name, sphere);
+    cases.push(case(&icosphere_name, icosphere.clone(), 512));
     let bunny = mesh("bunny_40k", meshes.join("bunny_40k.obj"))?;
     for size in [200, 1024, 2048, 4096] {
         cases.push(case("bunny_40k", bunny.clone(), size));
     }
     for test in [TriangleTest::Cramer, TriangleTest::Moller] {
         cases.push(Case { triangle_test: test, ..case("bunny_40k", bunny.clone(), 2048) });
+    }
+    // The design choice measured in the same run: each way of finding candidates.
+    for acceleration in [Acceleration::Bins, Acceleration::Hierarchy] {
+        for (name, scene) in [("bunny_40k", &bunny), (icosphere_name.as_str(), &icosphere)] {
+            cases.push(Case { acceleration, ..case(name, scene.clone(), 512) });
+        }
+        cases.push(Case { acceleration, ..case("bunny_40k", bunny.clone(), 2048) });
     }
     Ok(cases)
 }
@@ -333,15 +340,16 @@ pub fn markdown(rows: &[Row], adapter: &str) -> String {
         rows.first().map_or(0, |r| r.runs)
     );
     out.push_str(
-        "| scene | triangle test | primitives | pixels | BVH build ms | kernel ms | wall ms | Mrays/s | scene MiB | peak MiB | samples | >1 level | hit/miss | depth rel. max | normal max (rad) |\n\
-         | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n",
+        "| scene | triangle test | candidates from | primitives | pixels | build ms | kernel ms | wall ms | Mrays/s | scene MiB | peak MiB | samples | >1 level | hit/miss | depth rel. max | normal max (rad) |\n\
+         | --- | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n",
     );
     for r in rows {
         let _ = writeln!(
             out,
-            "| {} | {} | {} | {}² | {} | {:.2} | {:.1} | {:.1} | {:.2} | {:.0} | {} | {:.3}% | {} | {:.1e} | {:.1e} |",
+            "| {} | {} | {} | {} | {}² | {} | {:.2} | {:.1} | {:.1} | {:.2} | {:.0} | {} | {:.3}% | {} | {:.1e} | {:.1e} |",
             r.name,
             r.triangle_test.name(),
+            r.acceleration.name(),
             r.primitives,
             if r.width == r.height { r.width.to_string() } else { format!("{}×{}", r.width, r.height) },
             r.bvh_build_ms.map_or("-".to_string(), |ms| format!("{ms:.1}")),
@@ -362,13 +370,14 @@ pub fn markdown(rows: &[Row], adapter: &str) -> String {
 
 /// The rows as CSV, one line each.
 pub fn csv(rows: &[Row]) -> String {
-    let mut out = String::from("scene,triangle_test,primitives,triangles,width,height,bvh_build_ms,scene_bytes,kernel_ms,kernel_from_timestamps,wall_ms,mrays_per_s,peak_mib,samples,off_by_more_than_one_fraction,hit_mismatches,depth_rel_max,normal_angle_max_rad,color_float_max\n");
+    let mut out = String::from("scene,triangle_test,acceleration,primitives,triangles,width,height,bvh_build_ms,scene_bytes,kernel_ms,kernel_from_timestamps,wall_ms,mrays_per_s,peak_mib,samples,off_by_more_than_one_fraction,hit_mismatches,depth_rel_max,normal_angle_max_rad,color_float_max\n");
     for r in rows {
         let _ = writeln!(
             out,
-            "{},{},{},{},{},{},{},{},{:.4},{},{:.3},{:.3},{:.1},{},{:.6},{},{:.3e},{:.3e},{:.3e}",
+            "{},{},{},{},{},{},{},{},{},{:.4},{},{:.3},{:.3},{:.1},{},{:.6},{},{:.3e},{:.3e},{:.3e}",
             r.name,
             r.triangle_test.name(),
+            r.acceleration.name(),
             r.primitives,
             r.triangles,
             r.width,

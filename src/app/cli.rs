@@ -1,4 +1,4 @@
-//! Command-line arguments (SPEC §1). The course's single-dash spellings (`-input`,
+//! Command-line arguments (docs/SPEC.md §1). The course's single-dash spellings (`-input`,
 //! `-shade_back`) and double-dash ones (`--input`, `--shade-back`) are the same flags, in any
 //! order. Errors are one line naming the flag; the binary exits with status 2 on them.
 

@@ -2,11 +2,11 @@
 
 use crate::app::backend::Backend;
 use crate::app::cli::{Outputs, RenderArgs};
-use crate::app::output::{self, Sink};
+use crate::app::output::{self, Output, Pixels, Sink};
 use crate::app::progress::Progress;
 use crate::app::split::{self, Split};
 use raycaster::gpu::{GpuError, RenderStats};
-use raycaster::image_io::ImageError;
+use raycaster::image_io::{self, ImageError, ImageFormat};
 use raycaster::metrics::OutputErrors;
 use raycaster::render::RenderOptions;
 use raycaster::scene::{self, Scene, SceneError, SceneWarning};
@@ -113,7 +113,7 @@ pub fn render_scene(
     let mut writing = std::time::Duration::ZERO;
     let options = options_for(args);
     let outputs = output::outputs(&args.output, &args.normals, &args.depth);
-    let (first, rows) = args.tile.map_or((0, args.height), |t| t.band(args.height));
+    let band = args.tile.map_or((0, args.height), |t| t.band(args.height));
     let mut sinks = match args.tile {
         None => outputs.iter().map(|o| Sink::image(o, args.width, args.height)).collect::<Result<Vec<_>, _>>()?,
         Some(tile) => split::part_headers(scene, args, backend, tile, &outputs)
@@ -123,21 +123,35 @@ pub fn render_scene(
             .map(|(header, o)| Sink::part(header, o))
             .collect::<Result<Vec<_>, _>>()?,
     };
-    let bar = Progress::new(progress, u64::from(rows), "rows");
-    let stats = backend.render_band(scene, &options, first, rows, |_first_row, tile| {
+    let bar = Progress::new(progress, u64::from(band.1), "rows");
+    // One tile's rows into every sink, `pixels` giving each output's; counted as writing.
+    let mut write = |rows: u32, pixels: &mut dyn FnMut(&Output) -> Pixels| {
         let written = Instant::now();
         for (sink, o) in sinks.iter_mut().zip(&outputs) {
-            sink.write(&o.pixels(&tile))?;
+            sink.write(&pixels(o))?;
         }
         writing += written.elapsed();
-        bar.advance(tile.height as u64);
+        bar.advance(u64::from(rows));
         Ok::<(), Error>(())
-    })?;
+    };
+    let stats = if outputs.iter().any(|o| o.format == ImageFormat::Exr) {
+        // Floats leave the backend as they are, for the EXR files.
+        backend.render_band(scene, &options, band.0, band.1, |_first_row, tile| {
+            write(tile.height, &mut |o| o.pixels(&tile))
+        })?
+    } else {
+        // 8-bit images only: on the GPU the kernel quantises (a fraction of the bytes to
+        // read back, and no float decoding).
+        let depth_range = args.depth.as_ref().map_or((0.0, 1.0), |d| (d.min, d.max));
+        backend.render_images(scene, &options, depth_range, band, |_first_row, mut images| {
+            write(images.rows, &mut |o| Pixels::Rgb8(images.take(o.kind)))
+        })?
+    };
     drop(bar);
     let render_ms = (start.elapsed() - writing).as_secs_f64() * 1e3;
     let finishing = Instant::now();
     let finished = sinks.into_iter().map(Sink::finish).collect::<Result<Vec<_>, _>>()?;
-    raycaster::image_io::persist_all(finished)?;
+    image_io::persist_all(finished)?;
     let write_ms = (writing + finishing.elapsed()).as_secs_f64() * 1e3;
     Ok((stats, render_ms, write_ms))
 }

@@ -4,7 +4,9 @@
 use crate::camera::Ray;
 use glam::DVec3;
 
-/// A hit in world space.
+/// A hit. `t` is the world t (a ray carried into a Transform keeps the scale of its
+/// direction); `normal` is in the coordinates of the ray that found the hit until each
+/// enclosing Transform maps it back, so the hits the reference returns are in world space.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Hit {
     pub t: f64,

@@ -1,22 +1,21 @@
 //! The CPU reference renderer: f64, textbook, and independent of the GPU path's data
 //! preparation. It walks the parsed scene tree for every ray, carrying the ray into each
-//! Transform's object space as SPEC §4 says, so what it computes can be checked against
-//! the spec line by line. It is the ground truth of the tests; clarity comes before speed
-//! (rows run in parallel, and a mesh is skipped when the ray misses its bounding box).
+//! Transform's object space as docs/SPEC.md §4 says, so what it computes can be checked
+//! against the spec line by line. It is the ground truth of the tests; clarity comes before
+//! speed (pixels run in parallel, and a mesh is skipped when the ray misses its bounding box).
 
 mod intersect;
 
 pub use intersect::{intersect_plane, intersect_sphere, intersect_triangle, Hit};
 
 use crate::camera::{PrimaryRays, Ray};
-use crate::render::{Frame, RenderOptions};
-use crate::scene::{Material, Mesh, Object, Scene, Shape};
+use crate::render::{Frame, Pixel, RenderOptions};
+use crate::scene::{Bounds, Material, Mesh, Object, Scene, Shape};
 use glam::{DMat4, DVec3};
 use rayon::prelude::*;
 use std::collections::HashMap;
 
-/// Renders `scene` with the f64 reference. Panics only if the camera is degenerate, which
-/// the parser rejects.
+/// Renders `scene` with the f64 reference.
 pub fn render(scene: &Scene, options: &RenderOptions) -> Frame {
     render_rows(scene, options, 0, options.height)
 }
@@ -37,8 +36,7 @@ pub struct Reference<'a> {
 
 impl<'a> Reference<'a> {
     pub fn new(scene: &'a Scene, options: &RenderOptions) -> Reference<'a> {
-        let rays = PrimaryRays::new(&scene.camera, options.width, options.height)
-            .expect("the parser rejects cameras whose up is parallel to their direction");
+        let rays = PrimaryRays::for_camera(&scene.camera, options.width, options.height);
         Reference { tracer: Tracer::new(scene), rays, options: *options }
     }
 
@@ -47,39 +45,26 @@ impl<'a> Reference<'a> {
         let width = self.options.width;
         let pixels: Vec<(u32, u32)> =
             (first_row..first_row + rows).flat_map(|row| (0..width).map(move |i| (i, row))).collect();
-        let mut frame = self.pixels(&pixels);
-        frame.width = width;
-        frame.height = rows;
-        frame
+        Frame::from_pixels(&RenderOptions { height: rows, ..self.options }, self.render_pixels(&pixels))
     }
 
     /// The listed pixels (column from the left, row from the top) as a one-row frame, in
     /// that order, rendered in parallel.
     pub fn pixels(&self, pixels: &[(u32, u32)]) -> Frame {
-        let results: Vec<PixelResult> = pixels
+        let one_row = RenderOptions { width: pixels.len() as u32, height: 1, ..self.options };
+        Frame::from_pixels(&one_row, self.render_pixels(pixels))
+    }
+
+    /// The listed pixels' results, in that order, rendered in parallel.
+    fn render_pixels(&self, pixels: &[(u32, u32)]) -> Vec<Pixel> {
+        pixels
             .par_iter()
             .map(|&(i, row)| {
                 // Image rows run from the top; the camera's j runs from the bottom.
                 let j = self.options.height - 1 - row;
                 self.tracer.pixel(&self.rays.ray(i, j), self.rays.t_min(), &self.options)
             })
-            .collect();
-        let mut frame = Frame::new(&RenderOptions { width: pixels.len() as u32, height: 1, ..self.options });
-        for (k, p) in results.into_iter().enumerate() {
-            frame.hit[k] = p.hit.is_some();
-            if self.options.color {
-                frame.color[k] = p.color.as_vec3().to_array();
-            }
-            if let Some(hit) = p.hit {
-                if self.options.normals {
-                    frame.normal[k] = hit.normal.as_vec3().to_array();
-                }
-                if self.options.depth {
-                    frame.depth[k] = hit.t as f32;
-                }
-            }
-        }
-        frame
+            .collect()
     }
 }
 
@@ -88,16 +73,11 @@ pub fn trace(scene: &Scene, ray: &Ray, t_min: f64) -> Option<Hit> {
     Tracer::new(scene).closest_hit(ray, t_min)
 }
 
-struct PixelResult {
-    hit: Option<Hit>,
-    color: DVec3,
-}
-
 /// The scene plus the few things worth computing once rather than per ray.
 struct Tracer<'a> {
     scene: &'a Scene,
     /// Bounding boxes of meshes, keyed by the mesh's address (meshes are shared by `Arc`).
-    mesh_bounds: HashMap<usize, (DVec3, DVec3)>,
+    mesh_bounds: HashMap<usize, Bounds>,
 }
 
 impl<'a> Tracer<'a> {
@@ -107,14 +87,21 @@ impl<'a> Tracer<'a> {
         Tracer { scene, mesh_bounds }
     }
 
-    fn pixel(&self, ray: &Ray, t_min: f64, options: &RenderOptions) -> PixelResult {
+    /// The pixel whose primary ray is `ray`: normal and depth zero where nothing is hit,
+    /// colour zero unless `options` asks for it.
+    fn pixel(&self, ray: &Ray, t_min: f64, options: &RenderOptions) -> Pixel {
         let hit = self.closest_hit(ray, t_min);
         let color = match (&hit, options.color) {
             (_, false) => DVec3::ZERO,
             (None, true) => self.scene.background.color,
             (Some(hit), true) => self.shade(hit, ray, options.shade_back),
         };
-        PixelResult { hit, color }
+        Pixel {
+            hit: hit.is_some(),
+            color: color.as_vec3().to_array(),
+            normal: hit.map_or([0.0; 3], |hit| hit.normal.as_vec3().to_array()),
+            depth: hit.map_or(0.0, |hit| hit.t as f32),
+        }
     }
 
     fn closest_hit(&self, ray: &Ray, t_min: f64) -> Option<Hit> {
@@ -125,7 +112,7 @@ impl<'a> Tracer<'a> {
         closest
     }
 
-    /// SPEC §5: diffuse with ambient; a back-facing hit is black unless `shade_back`.
+    /// docs/SPEC.md §5: diffuse with ambient; a back-facing hit is black unless `shade_back`.
     fn shade(&self, hit: &Hit, ray: &Ray, shade_back: bool) -> DVec3 {
         let mut normal = hit.normal;
         if ray.direction.dot(normal) > 0.0 {
@@ -179,8 +166,9 @@ impl<'a> Tracer<'a> {
         }
     }
 
-    /// SPEC §4: intersect the child with `(M⁻¹·o, M⁻¹·d)`, the direction not renormalised so
-    /// that the child's t is the world t; the normal comes back as `normalise((M⁻¹)ᵀ·n)`.
+    /// docs/SPEC.md §4: intersect the child with `(M⁻¹·o, M⁻¹·d)`, the direction not
+    /// renormalised so that the child's t is the world t; the normal comes back as
+    /// `normalise((M⁻¹)ᵀ·n)`.
     fn intersect_transformed(&self, matrix: &DMat4, child: &Object, ray: &Ray, t_min: f64, closest: &mut Option<Hit>) {
         let inverse = matrix.inverse();
         let local =
@@ -195,8 +183,7 @@ impl<'a> Tracer<'a> {
     }
 
     fn intersect_mesh(&self, mesh: &Mesh, ray: &Ray, t_min: f64, t_max: f64) -> Option<(f64, DVec3)> {
-        let (lo, hi) = self.mesh_bounds[&mesh_key(mesh)];
-        if !ray_meets_box(ray, lo, hi, t_min, t_max) {
+        if !ray_meets_box(ray, &self.mesh_bounds[&mesh_key(mesh)], t_min, t_max) {
             return None;
         }
         let mut best: Option<(f64, DVec3)> = None;
@@ -215,24 +202,25 @@ fn mesh_key(mesh: &Mesh) -> usize {
     mesh as *const Mesh as usize
 }
 
-fn collect_mesh_bounds(objects: &[Object], bounds: &mut HashMap<usize, (DVec3, DVec3)>) {
+/// Each mesh's own box ([`Mesh::bounds`], in the mesh's coordinates), once per mesh.
+fn collect_mesh_bounds(objects: &[Object], bounds: &mut HashMap<usize, Bounds>) {
     for object in objects {
         match &object.shape {
             Shape::Group(children) => collect_mesh_bounds(children, bounds),
             Shape::Transform { child, .. } => collect_mesh_bounds(std::slice::from_ref(child), bounds),
             Shape::Mesh { mesh, .. } => {
-                let lo = mesh.positions.iter().fold(DVec3::INFINITY, |a, &p| a.min(p));
-                let hi = mesh.positions.iter().fold(DVec3::NEG_INFINITY, |a, &p| a.max(p));
-                bounds.insert(mesh_key(mesh), (lo, hi));
+                bounds.entry(mesh_key(mesh)).or_insert_with(|| mesh.bounds());
             }
             _ => {}
         }
     }
 }
 
-/// Slab test, conservative: the box is widened by a relative margin so that rounding can
-/// never make the reference skip a mesh that a triangle test would hit.
-fn ray_meets_box(ray: &Ray, lo: DVec3, hi: DVec3, t_min: f64, t_max: f64) -> bool {
+/// Slab test, conservative: the box is widened by a margin of 1e-9 times its largest extent
+/// (at least 1e-9) so that rounding can never make the reference skip a mesh that a
+/// triangle test would hit.
+fn ray_meets_box(ray: &Ray, bounds: &Bounds, t_min: f64, t_max: f64) -> bool {
+    let (lo, hi) = (bounds.min, bounds.max);
     let margin = (hi - lo).max_element().max(1.0) * 1e-9;
     let (lo, hi) = (lo - DVec3::splat(margin), hi + DVec3::splat(margin));
     let (mut near, mut far) = (t_min, t_max);

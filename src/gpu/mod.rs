@@ -1,20 +1,24 @@
 //! The GPU backend: a WGSL compute kernel driven through wgpu, headless.
 //!
 //! A [`GpuRenderer`] owns the device (created once per process, reused for any number of
-//! scenes) and a cache of kernels specialised by `override` constants. [`GpuRenderer::render`]
-//! flattens the scene ([`buffers`]), dispatches one invocation per pixel in tiles of rows
-//! (so memory is bounded by the tile, not the frame), and reads the float results back
-//! into a [`Frame`].
+//! scenes) and a cache of kernels specialised by `override` constants.
+//! [`GpuRenderer::prepare`] flattens a scene ([`flatten`], into the structs of [`layout`]),
+//! uploads it and binds it once; the [`PreparedScene`] then dispatches one invocation per
+//! pixel in tiles of rows (so memory is bounded by the tile, not the frame), reading tile k
+//! back while the device renders tile k + 1.
 
-pub mod buffers;
+pub mod binning;
+pub mod flatten;
+pub mod layout;
+mod prepared;
 
-use crate::camera::PrimaryRays;
-use crate::render::{row_tiles, Frame, RenderOptions, SphereTest, TriangleTest};
+use crate::render::{Frame, RenderOptions, SphereTest, TriangleTest};
 use crate::scene::Scene;
-use buffers::{PixelLayout, SceneBuffers};
+use flatten::SceneBuffers;
+use layout::PixelLayout;
+pub use prepared::{PackedTile, PreparedScene};
 use std::collections::HashMap;
 use std::sync::Mutex;
-use wgpu::util::DeviceExt;
 
 /// The kernel's source, compiled into the binary.
 pub const SHADER_SOURCE: &str = include_str!("../../shaders/raycast.wgsl");
@@ -25,8 +29,58 @@ const WORKGROUP: u32 = 8;
 /// The output tile of one dispatch. Small tiles stay in the CPU's caches on lavapipe:
 /// bunny_40k at 2048² ran at 7.4 Mrays/s with 64 MiB tiles, 9.3 with 16 MiB, 9.8 with 8 MiB,
 /// 10.3 with 2 MiB and 10.2 with 1 MiB (`raycaster bench --only bunny_40k`, kernel time from
-/// timestamps); below that the dispatches multiply. It also bounds host memory.
-const MAX_TILE_BYTES: u64 = 2 << 20;
+/// timestamps, float output of 8 words a pixel); below that the dispatches multiply. It
+/// also bounds host memory.
+pub const MAX_TILE_BYTES: u64 = 2 << 20;
+
+/// How a [`GpuRenderer`] renders; [`Default`] is what the command line uses.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct GpuOptions {
+    /// Caps the output buffer of one dispatch (or less if the adapter's limits are lower;
+    /// at least one row); taller images render in several tiles.
+    pub max_tile_bytes: u64,
+    /// Scenes with at least this many finite primitives get a hierarchy; `usize::MAX` turns
+    /// it off, 1 forces it on.
+    pub bvh_min_primitives: usize,
+    /// How rays find their candidates.
+    pub acceleration: Acceleration,
+}
+
+impl Default for GpuOptions {
+    fn default() -> Self {
+        GpuOptions {
+            max_tile_bytes: MAX_TILE_BYTES,
+            bvh_min_primitives: flatten::BVH_MIN_PRIMITIVES,
+            acceleration: Acceleration::Auto,
+        }
+    }
+}
+
+/// How the kernel finds the primitives a ray may hit (planes are always tested directly).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Acceleration {
+    /// Screen-space bins where their lists are short, else the hierarchy from
+    /// [`GpuOptions::bvh_min_primitives`] on, else flat loops.
+    #[default]
+    Auto,
+    /// Screen-space bins ([`binning`]).
+    Bins,
+    /// The bounding volume hierarchy ([`crate::bvh`]).
+    Hierarchy,
+    /// Every primitive for every ray.
+    Flat,
+}
+
+impl Acceleration {
+    pub fn name(self) -> &'static str {
+        match self {
+            Acceleration::Auto => "auto",
+            Acceleration::Bins => "bins",
+            Acceleration::Hierarchy => "hierarchy",
+            Acceleration::Flat => "flat",
+        }
+    }
+}
 
 #[derive(Debug, thiserror::Error)]
 pub enum GpuError {
@@ -55,27 +109,29 @@ pub struct KernelConfig {
     pub triangle_test: TriangleTest,
     pub sphere_test: SphereTest,
     pub use_bvh: bool,
+    pub use_bins: bool,
 }
 
 impl KernelConfig {
-    pub fn new(buffers: &SceneBuffers, options: &RenderOptions) -> KernelConfig {
+    pub fn new(buffers: &SceneBuffers, pixel_layout: PixelLayout, options: &RenderOptions) -> KernelConfig {
         KernelConfig {
             has_spheres: !buffers.spheres.is_empty(),
             has_ellipsoids: !buffers.ellipsoids.is_empty(),
             has_planes: !buffers.planes.is_empty(),
             has_triangles: !buffers.triangles.is_empty(),
             orthographic: buffers.orthographic,
-            pixel_layout: PixelLayout::new(options),
+            pixel_layout,
             num_lights: buffers.lights.len() as u32,
             shade_back: options.shade_back,
             triangle_test: options.triangle_test,
             sphere_test: options.sphere_test,
             use_bvh: buffers.bvh.is_some(),
+            use_bins: buffers.bins.is_some(),
         }
     }
 
     /// The values for `PipelineCompilationOptions::constants`.
-    pub fn constants(&self) -> [(&'static str, f64); 14] {
+    pub fn constants(&self) -> [(&'static str, f64); 16] {
         let b = |v: bool| if v { 1.0 } else { 0.0 };
         [
             ("HAS_SPHERES", b(self.has_spheres)),
@@ -87,14 +143,51 @@ impl KernelConfig {
             ("WANT_NORMAL", b(self.pixel_layout.normal)),
             ("WANT_DEPTH", b(self.pixel_layout.depth)),
             ("PIXEL_WORDS", self.pixel_layout.words() as f64),
+            ("PACKED_8BIT", b(self.pixel_layout.packed)),
             ("NUM_LIGHTS", self.num_lights as f64),
             ("SHADE_BACK", b(self.shade_back)),
             ("TRIANGLE_TEST", self.triangle_test as u32 as f64),
             ("SPHERE_TEST", self.sphere_test as u32 as f64),
             ("USE_BVH", b(self.use_bvh)),
+            ("USE_BINS", b(self.use_bins)),
         ]
     }
 }
+
+/// One of the kernel's bindings, in `@binding` order: the name of its WGSL variable,
+/// whether the kernel writes it, and the size of one element (the least a binding holds).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Binding {
+    pub name: &'static str,
+    pub writable: bool,
+    pub element_bytes: u64,
+}
+
+const fn binding<T>(name: &'static str, writable: bool) -> Binding {
+    Binding { name, writable, element_bytes: std::mem::size_of::<T>() as u64 }
+}
+
+/// Every binding of `shaders/raycast.wgsl`, index = `@binding`. The bind-group layout and
+/// every bind group are built from this table, and `tests/layout.rs` checks it against the
+/// shader's own declarations (names, order, access, element sizes).
+pub const BINDINGS: [Binding; 13] = [
+    binding::<layout::Params>("params", false),
+    binding::<layout::GpuSphere>("spheres", false),
+    binding::<layout::GpuEllipsoid>("ellipsoids", false),
+    binding::<layout::GpuPlane>("planes", false),
+    binding::<layout::GpuTriangle>("triangles", false),
+    binding::<[f32; 4]>("materials", false),
+    binding::<layout::GpuLight>("lights", false),
+    binding::<u32>("pixels", true),
+    binding::<crate::bvh::BvhNode>("nodes", false),
+    binding::<u32>("prim_refs", false),
+    binding::<layout::EyeTriangle>("eye_triangles", false),
+    binding::<[u32; 2]>("bin_ranges", false),
+    binding::<layout::BinItem>("bin_items", false),
+];
+
+/// The `@binding` of the output (`pixels`).
+const OUTPUT_BINDING: usize = 7;
 
 /// A wgpu device with the ray-casting kernel, ready to render scenes.
 pub struct GpuRenderer {
@@ -106,9 +199,8 @@ pub struct GpuRenderer {
     pipeline_layout: wgpu::PipelineLayout,
     module: wgpu::ShaderModule,
     pipelines: Mutex<HashMap<KernelConfig, wgpu::ComputePipeline>>,
-    max_tile_bytes: u64,
+    options: GpuOptions,
     timestamps: bool,
-    bvh_min_primitives: usize,
 }
 
 /// What a render cost, as far as the GPU can tell.
@@ -119,22 +211,29 @@ pub struct RenderStats {
     pub kernel_ns: Option<u64>,
     /// Dispatches the image took.
     pub tiles: u32,
-    /// Time to build the hierarchy on the CPU, when the scene got one.
+    /// Time to build the hierarchy or the bins on the CPU, when the scene got one.
     pub bvh_build_ms: Option<f64>,
     /// Time to flatten the scene into buffers (BVH build included) and upload them.
     pub prepare_ms: f64,
-    /// Bytes of scene data uploaded (primitives, materials, lights, hierarchy).
+    /// Bytes of scene data uploaded (primitives, materials, lights, hierarchy, bins).
     pub scene_bytes: u64,
+    /// How the kernel found candidates (never `Auto`: what the cost model chose).
+    pub acceleration: Acceleration,
 }
 
 impl GpuRenderer {
     /// Opens the first adapter wgpu offers (real GPUs come before CPU ones such as lavapipe;
     /// `WGPU_BACKEND` and the other wgpu environment variables are honoured).
     pub fn new() -> Result<GpuRenderer, GpuError> {
-        pollster::block_on(Self::new_async())
+        Self::with_options(GpuOptions::default())
     }
 
-    async fn new_async() -> Result<GpuRenderer, GpuError> {
+    /// As [`GpuRenderer::new`], rendering as `options` say.
+    pub fn with_options(options: GpuOptions) -> Result<GpuRenderer, GpuError> {
+        pollster::block_on(Self::open(options))
+    }
+
+    async fn open(options: GpuOptions) -> Result<GpuRenderer, GpuError> {
         let mut descriptor = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
         if std::env::var_os("WGPU_BACKEND").is_none() {
             descriptor.backends = wgpu::Backends::PRIMARY;
@@ -147,7 +246,7 @@ impl GpuRenderer {
             })
             .await
             .map_err(|e| GpuError::NoAdapter(e.to_string()))?;
-        // The defaults are below what lavapipe and real GPUs offer (MEASURED.md); ask for all.
+        // The defaults are below what lavapipe and real GPUs offer (docs/lavapipe.md); ask for all.
         let limits = adapter.limits();
         // Kernel time from the GPU's own clock where the adapter offers it (lavapipe does).
         let features = adapter.features() & wgpu::Features::TIMESTAMP_QUERY;
@@ -155,54 +254,72 @@ impl GpuRenderer {
             .request_device(&wgpu::DeviceDescriptor {
                 label: Some("raycaster"),
                 required_features: features,
-                required_limits: limits.clone(),
+                required_limits: limits,
                 ..Default::default()
             })
             .await
             .map_err(|e| GpuError::Device(e.to_string()))?;
+        Ok(Self::with_device(adapter.get_info(), device, queue, options))
+    }
+
+    /// Renders on a device the caller opened (as wgpu's examples hand theirs to `init`).
+    /// The renderer uses the device's limits and, where the device was opened with
+    /// `TIMESTAMP_QUERY`, times the kernel.
+    pub fn with_device(
+        adapter_info: wgpu::AdapterInfo,
+        device: wgpu::Device,
+        queue: wgpu::Queue,
+        options: GpuOptions,
+    ) -> GpuRenderer {
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("raycast.wgsl"),
             source: wgpu::ShaderSource::Wgsl(SHADER_SOURCE.into()),
         });
+        let entries: Vec<_> = BINDINGS.iter().enumerate().map(|(k, b)| layout_entry(k as u32, b)).collect();
         let bind_group_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("raycast bindings"),
-            entries: &(0..10).map(storage_entry).collect::<Vec<_>>(),
+            entries: &entries,
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("raycast layout"),
             bind_group_layouts: &[Some(&bind_group_layout)],
             immediate_size: 0,
         });
-        Ok(GpuRenderer {
+        GpuRenderer {
+            limits: device.limits(),
+            timestamps: device.features().contains(wgpu::Features::TIMESTAMP_QUERY),
             device,
             queue,
-            adapter_info: adapter.get_info(),
-            limits,
+            adapter_info,
             bind_group_layout,
             pipeline_layout,
             module,
             pipelines: Mutex::new(HashMap::new()),
-            max_tile_bytes: MAX_TILE_BYTES,
-            timestamps: features.contains(wgpu::Features::TIMESTAMP_QUERY),
-            bvh_min_primitives: buffers::BVH_MIN_PRIMITIVES,
-        })
+            options,
+        }
     }
 
-    /// Caps the output buffer of one dispatch (default 2 MiB, or less if the adapter's
-    /// limits are lower; at least one row); taller images render in several tiles.
-    pub fn set_max_tile_bytes(&mut self, bytes: u64) {
-        self.max_tile_bytes = bytes;
-    }
-
-    /// Scenes with at least this many finite primitives get a hierarchy (default
-    /// [`buffers::BVH_MIN_PRIMITIVES`]); `usize::MAX` turns it off, 1 forces it on.
-    pub fn set_bvh_min_primitives(&mut self, count: usize) {
-        self.bvh_min_primitives = count;
+    /// Another renderer on this one's device and queue, rendering as `options` say (opens
+    /// no second device).
+    pub fn on_same_device(&self, options: GpuOptions) -> GpuRenderer {
+        Self::with_device(self.adapter_info.clone(), self.device.clone(), self.queue.clone(), options)
     }
 
     /// Which adapter this renderer runs on (name, backend, device type).
     pub fn adapter_info(&self) -> &wgpu::AdapterInfo {
         &self.adapter_info
+    }
+
+    /// How this renderer renders.
+    pub fn options(&self) -> &GpuOptions {
+        &self.options
+    }
+
+    /// Flattens, uploads and binds `scene` for the outputs `options` asks for, once; the
+    /// result renders the image tile by tile. `packed` asks for the outputs as 8-bit images
+    /// (one word per pixel and output, quantised by the kernel), else as floats.
+    pub fn prepare(&self, scene: &Scene, options: &RenderOptions, packed: bool) -> Result<PreparedScene<'_>, GpuError> {
+        PreparedScene::new(self, scene, options, PixelLayout::new(options, packed))
     }
 
     /// Renders `scene` into float buffers; see [`crate::image_io`] for images.
@@ -236,30 +353,8 @@ impl GpuRenderer {
         rows: u32,
         mut on_tile: impl FnMut(u32, Frame) -> Result<(), E>,
     ) -> Result<RenderStats, E> {
-        assert!(first + rows <= options.height, "the band lies inside the image");
-        let start = std::time::Instant::now();
-        let rays = PrimaryRays::new(&scene.camera, options.width, options.height)
-            .expect("the parser rejects cameras whose up is parallel to their direction");
-        let buffers = SceneBuffers::new(scene, &rays, self.bvh_min_primitives);
-        let pipeline = self.pipeline(KernelConfig::new(&buffers, options));
-        let inputs = self.upload(&buffers)?;
-        let layout = PixelLayout::new(options);
-        let tile_rows = self.tile_rows(options.width, &layout)?;
-        let mut stats = RenderStats {
-            kernel_ns: self.timestamps.then_some(0),
-            tiles: 0,
-            bvh_build_ms: buffers.bvh.as_ref().map(|b| b.build_ms),
-            prepare_ms: start.elapsed().as_secs_f64() * 1e3,
-            scene_bytes: inputs.bytes(),
-        };
-        for (offset, rows) in row_tiles(rows, tile_rows) {
-            let first_row = first + offset;
-            let (words, kernel_ns) = self.render_tile(&pipeline, &inputs, buffers.params, &layout, first_row, rows)?;
-            stats.kernel_ns = stats.kernel_ns.zip(kernel_ns).map(|(a, b)| a + b);
-            stats.tiles += 1;
-            on_tile(first_row, layout.decode(options, rows, &words))?;
-        }
-        Ok(stats)
+        let prepared = self.prepare(scene, options, false)?;
+        prepared.render_band(first, rows, |tile| on_tile(tile.first_row, tile.to_frame()))
     }
 
     fn pipeline(&self, config: KernelConfig) -> wgpu::ComputePipeline {
@@ -291,172 +386,23 @@ impl GpuRenderer {
         if row_bytes > adapter_budget || (width as u64).div_ceil(WORKGROUP as u64) > max_groups {
             return Err(GpuError::TooLarge(format!("an image {width} pixels wide exceeds the adapter's limits")));
         }
-        let rows = (self.max_tile_bytes.min(adapter_budget) / row_bytes).max(1);
+        let rows = (self.options.max_tile_bytes.min(adapter_budget) / row_bytes).max(1);
         // Whole workgroup rows where possible, so no dispatch ends in a half-empty workgroup.
         let rows = if rows >= WORKGROUP as u64 { rows - rows % WORKGROUP as u64 } else { rows };
         Ok(rows.min(max_groups * WORKGROUP as u64) as u32)
     }
-
-    fn upload(&self, buffers: &SceneBuffers) -> Result<SceneInputs, GpuError> {
-        let limit = self.limits.max_storage_buffer_binding_size;
-        let storage = |label: &str, bytes: &[u8]| -> Result<wgpu::Buffer, GpuError> {
-            if bytes.len() as u64 > limit {
-                return Err(GpuError::TooLarge(format!(
-                    "{label}: {} bytes exceed the adapter's storage binding limit of {limit} bytes",
-                    bytes.len()
-                )));
-            }
-            Ok(self.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents: bytes,
-                usage: wgpu::BufferUsages::STORAGE,
-            }))
-        };
-        Ok(SceneInputs {
-            spheres: storage("spheres", non_empty(&buffers.spheres))?,
-            ellipsoids: storage("ellipsoids", non_empty(&buffers.ellipsoids))?,
-            planes: storage("planes", non_empty(&buffers.planes))?,
-            triangles: storage("triangles", non_empty(&buffers.triangles))?,
-            materials: storage("materials", non_empty(&buffers.materials))?,
-            lights: storage("lights", non_empty(&buffers.lights))?,
-            nodes: storage("bvh nodes", non_empty(buffers.bvh.as_ref().map_or(&[][..], |b| &b.nodes)))?,
-            prim_refs: storage("bvh primitives", non_empty(buffers.bvh.as_ref().map_or(&[][..], |b| &b.prim_refs)))?,
-        })
-    }
-
-    fn render_tile(
-        &self,
-        pipeline: &wgpu::ComputePipeline,
-        inputs: &SceneInputs,
-        mut params: buffers::Params,
-        layout: &PixelLayout,
-        first_row: u32,
-        rows: u32,
-    ) -> Result<(Vec<u32>, Option<u64>), GpuError> {
-        params.first_row = first_row;
-        params.tile_rows = rows;
-        let params_buffer = self.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("params"),
-            contents: bytemuck::bytes_of(&params),
-            usage: wgpu::BufferUsages::STORAGE,
-        });
-        let size = params.width as u64 * rows as u64 * layout.words() as u64 * 4;
-        let output = self.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("pixels"),
-            size,
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-            mapped_at_creation: false,
-        });
-        let readback = self.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("readback"),
-            size,
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let bindings = [
-            &params_buffer,
-            &inputs.spheres,
-            &inputs.ellipsoids,
-            &inputs.planes,
-            &inputs.triangles,
-            &inputs.materials,
-            &inputs.lights,
-            &output,
-            &inputs.nodes,
-            &inputs.prim_refs,
-        ];
-        let entries: Vec<_> = bindings
-            .iter()
-            .enumerate()
-            .map(|(k, b)| wgpu::BindGroupEntry { binding: k as u32, resource: b.as_entire_binding() })
-            .collect();
-        let bind_group = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("raycast"),
-            layout: &self.bind_group_layout,
-            entries: &entries,
-        });
-        let mut encoder =
-            self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("raycast") });
-        // Per render, not per renderer: renders from several threads must not share them.
-        let timer = self.timestamps.then(|| Timer::new(&self.device));
-        {
-            let timestamp_writes = timer.as_ref().map(|t| wgpu::ComputePassTimestampWrites {
-                query_set: &t.queries,
-                beginning_of_pass_write_index: Some(0),
-                end_of_pass_write_index: Some(1),
-            });
-            let mut pass =
-                encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("raycast"), timestamp_writes });
-            pass.set_pipeline(pipeline);
-            pass.set_bind_group(0, &bind_group, &[]);
-            pass.dispatch_workgroups(params.width.div_ceil(WORKGROUP), rows.div_ceil(WORKGROUP), 1);
-        }
-        encoder.copy_buffer_to_buffer(&output, 0, &readback, 0, size);
-        if let Some(timer) = &timer {
-            timer.resolve(&mut encoder);
-        }
-        self.queue.submit([encoder.finish()]);
-        let pixels: Vec<u32> = bytemuck::pod_collect_to_vec(&read_back(&self.device, &readback)?);
-        let kernel_ns = match &timer {
-            Some(timer) => Some(timer.elapsed_ns(&self.device, self.queue.get_timestamp_period())?),
-            None => None,
-        };
-        Ok((pixels, kernel_ns))
-    }
 }
 
-/// The scene's read-only buffers on the device.
-struct SceneInputs {
-    spheres: wgpu::Buffer,
-    ellipsoids: wgpu::Buffer,
-    planes: wgpu::Buffer,
-    triangles: wgpu::Buffer,
-    materials: wgpu::Buffer,
-    lights: wgpu::Buffer,
-    nodes: wgpu::Buffer,
-    prim_refs: wgpu::Buffer,
-}
-
-impl SceneInputs {
-    fn bytes(&self) -> u64 {
-        [
-            &self.spheres,
-            &self.ellipsoids,
-            &self.planes,
-            &self.triangles,
-            &self.materials,
-            &self.lights,
-            &self.nodes,
-            &self.prim_refs,
-        ]
-        .iter()
-        .map(|b| b.size())
-        .sum()
-    }
-}
-
-fn storage_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
+fn layout_entry(index: u32, binding: &Binding) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
-        binding,
+        binding: index,
         visibility: wgpu::ShaderStages::COMPUTE,
         ty: wgpu::BindingType::Buffer {
-            // The last binding is the output.
-            ty: wgpu::BufferBindingType::Storage { read_only: binding != 7 },
+            ty: wgpu::BufferBindingType::Storage { read_only: !binding.writable },
             has_dynamic_offset: false,
-            min_binding_size: None,
+            min_binding_size: std::num::NonZeroU64::new(binding.element_bytes),
         },
         count: None,
-    }
-}
-
-/// A zero-sized buffer cannot be bound, so an empty list is uploaded as one zeroed element
-/// (the kernel reads only as many as `Params` counts).
-fn non_empty<T: bytemuck::Pod>(items: &[T]) -> &[u8] {
-    const ZEROS: [u8; 64] = [0; 64];
-    if items.is_empty() {
-        &ZEROS[..std::mem::size_of::<T>()]
-    } else {
-        bytemuck::cast_slice(items)
     }
 }
 

@@ -1,6 +1,6 @@
 //! Scene front end: lexer, parser and OBJ reader, producing the typed [`model`].
 //!
-//! Entry points: [`load_scene`] / [`parse_scene`] for scene files (SPEC §2) and
+//! Entry points: [`load_scene`] / [`parse_scene`] for scene files (docs/SPEC.md §2) and
 //! [`load_obj`] / [`parse_obj`] for meshes. Every failure is a [`SceneError`] that names
 //! the file, line and column; no input makes them panic.
 

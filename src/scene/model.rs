@@ -1,4 +1,4 @@
-//! The parsed scene: a typed tree that mirrors the scene file (SPEC §2), in f64.
+//! The parsed scene: a typed tree that mirrors the scene file (docs/SPEC.md §2), in f64.
 //!
 //! Both backends start from this model: the CPU reference walks it as it is, the GPU
 //! backend flattens it into buffers. Nodes keep the place in the file they came from, so
@@ -24,7 +24,7 @@ pub struct Scene {
     pub lights: Vec<DirectionalLight>,
     pub background: Background,
     pub materials: Vec<Material>,
-    /// The top-level `Group`.
+    /// The objects of the top-level `Group`.
     pub root: Vec<Object>,
     /// Non-fatal remarks made while reading (no lights, PhongMaterial terms ignored, ...).
     pub warnings: Vec<super::SceneWarning>,
@@ -38,18 +38,23 @@ pub enum Projection {
     Perspective { angle: f64 },
 }
 
-/// A camera as written in the file. `direction` and `up` are stored as given; the
-/// normalisation and Gram–Schmidt of SPEC §3 happen in [`Camera::basis`].
+/// A camera: the file's fields as written, and the orthonormal frame derived from them,
+/// validated when the camera is made ([`Camera::new`]), so that a `Camera` always has one.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Camera {
     pub projection: Projection,
     pub center: DVec3,
+    /// As written (not normalised); the renderers use [`Camera::frame`].
     pub direction: DVec3,
+    /// As written (neither normalised nor orthogonalised); the renderers use [`Camera::frame`].
     pub up: DVec3,
     pub location: Location,
+    /// Built from `direction` and `up` by [`Camera::new`], the only way to make a `Camera`.
+    frame: CameraBasis,
 }
 
-/// The orthonormal frame of a camera (SPEC §3).
+/// The orthonormal frame of a camera (docs/SPEC.md §3): unit `direction`, unit `up`
+/// orthogonal to it, `horizontal = direction × up`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CameraBasis {
     pub direction: DVec3,
@@ -57,18 +62,38 @@ pub struct CameraBasis {
     pub horizontal: DVec3,
 }
 
-impl Camera {
-    /// `direction` normalised, `up` made orthogonal to it and normalised,
-    /// `horizontal = direction × up`. `None` when `up` is parallel to `direction`
-    /// (or either is zero); the parser rejects such cameras.
-    pub fn basis(&self) -> Option<CameraBasis> {
-        let direction = self.direction.try_normalize()?;
-        let up = (self.up - self.up.dot(direction) * direction).try_normalize()?;
+impl CameraBasis {
+    /// `direction` normalised, `up` made orthogonal to it and normalised (Gram–Schmidt),
+    /// `horizontal = direction × up`. `None` when `up` is parallel to `direction`, either
+    /// is zero, or either cannot be normalised in f64 (such as `1e-200 0 0`).
+    pub fn new(direction: DVec3, up: DVec3) -> Option<CameraBasis> {
+        let unit_direction = direction.try_normalize()?;
+        let unit_up = (up - up.dot(unit_direction) * unit_direction).try_normalize()?;
         // A tiny residue of up after Gram–Schmidt means up ∥ direction.
-        if self.up.length() == 0.0 || self.up.cross(direction).length() <= 1e-12 * self.up.length() {
+        if up.length() == 0.0 || up.cross(unit_direction).length() <= 1e-12 * up.length() {
             return None;
         }
-        Some(CameraBasis { direction, up, horizontal: direction.cross(up) })
+        Some(CameraBasis { direction: unit_direction, up: unit_up, horizontal: unit_direction.cross(unit_up) })
+    }
+}
+
+impl Camera {
+    /// A camera with its frame; `None` when `direction` and `up` have none
+    /// ([`CameraBasis::new`]). The parser reports that case as an error in the file.
+    pub fn new(
+        projection: Projection,
+        center: DVec3,
+        direction: DVec3,
+        up: DVec3,
+        location: Location,
+    ) -> Option<Camera> {
+        let frame = CameraBasis::new(direction, up)?;
+        Some(Camera { projection, center, direction, up, location, frame })
+    }
+
+    /// The validated orthonormal frame (docs/SPEC.md §3), built when the camera was made.
+    pub fn frame(&self) -> &CameraBasis {
+        &self.frame
     }
 }
 
@@ -104,7 +129,7 @@ pub struct Object {
 }
 
 /// What a node is. Leaves carry the index of the material that was current when they
-/// were read (SPEC §2: `MaterialIndex` scopes by file order, not by hierarchy).
+/// were read (docs/SPEC.md §2: `MaterialIndex` scopes by file order, not by hierarchy).
 #[derive(Clone, Debug)]
 pub enum Shape {
     Group(Vec<Object>),
@@ -149,6 +174,133 @@ impl Mesh {
         let [a, b, c] = self.triangles[i];
         [self.positions[a as usize], self.positions[b as usize], self.positions[c as usize]]
     }
+
+    /// The box of the mesh's positions, in its own coordinates ([`Bounds::EMPTY`] when it
+    /// has none).
+    pub fn bounds(&self) -> Bounds {
+        Bounds::of_points(self.positions.iter().copied())
+    }
+}
+
+/// An axis-aligned box in f64, `min ≤ p ≤ max` (pbrt's `Bounds3`). Exact: no padding.
+/// [`crate::bvh::Aabb`] is its f32 twin at GPU precision.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Bounds {
+    pub min: DVec3,
+    pub max: DVec3,
+}
+
+impl Bounds {
+    /// The box that contains nothing (`min > max`), the identity of [`Bounds::union`].
+    pub const EMPTY: Bounds = Bounds { min: DVec3::INFINITY, max: DVec3::NEG_INFINITY };
+
+    /// The smallest box holding every point.
+    pub fn of_points(points: impl IntoIterator<Item = DVec3>) -> Bounds {
+        points.into_iter().fold(Bounds::EMPTY, |b, p| Bounds { min: b.min.min(p), max: b.max.max(p) })
+    }
+
+    /// `center ± half` (`half ≥ 0` on every axis).
+    pub fn centered(center: DVec3, half: DVec3) -> Bounds {
+        Bounds { min: center - half, max: center + half }
+    }
+
+    /// The box of the sphere `|p − center| = radius`.
+    pub fn sphere(center: DVec3, radius: f64) -> Bounds {
+        Bounds::centered(center, DVec3::splat(radius))
+    }
+
+    /// The box of the unit sphere carried by the affine map `to_world` (an ellipsoid):
+    /// [`ellipsoid_extent`] as a box.
+    pub fn ellipsoid(to_world: &DMat4) -> Bounds {
+        let (center, half) = ellipsoid_extent(to_world);
+        Bounds::centered(center, half)
+    }
+
+    pub fn union(&self, other: &Bounds) -> Bounds {
+        Bounds { min: self.min.min(other.min), max: self.max.max(other.max) }
+    }
+
+    /// Whether the box contains no point (`min > max` on some axis).
+    pub fn is_empty(&self) -> bool {
+        self.min.cmpgt(self.max).any()
+    }
+}
+
+/// The centre and the half-extent along each axis of the image of the unit sphere under the
+/// affine map `to_world` (an ellipsoid). The half-extent along axis i is the length of row i
+/// of the linear part: the largest `eᵢ · A·u` over unit vectors `u` is `|Aᵀ·eᵢ|`. Exact, so
+/// the box touches the ellipsoid on all six sides.
+pub fn ellipsoid_extent(to_world: &DMat4) -> (DVec3, DVec3) {
+    let half = DVec3::from_array([0, 1, 2].map(|r| to_world.row(r).truncate().length()));
+    (to_world.w_axis.truncate(), half)
+}
+
+/// How far a shape reaches: a box, or everywhere. Planes are unbounded, and so is
+/// anything that contains one (a group, a transform, a scene).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Extent {
+    Bounded(Bounds),
+    Unbounded,
+}
+
+impl Extent {
+    pub fn union(&self, other: &Extent) -> Extent {
+        match (self, other) {
+            (Extent::Bounded(a), Extent::Bounded(b)) => Extent::Bounded(a.union(b)),
+            _ => Extent::Unbounded,
+        }
+    }
+
+    /// The box, or `None` when unbounded.
+    pub fn bounds(&self) -> Option<Bounds> {
+        match self {
+            Extent::Bounded(b) => Some(*b),
+            Extent::Unbounded => None,
+        }
+    }
+}
+
+impl Shape {
+    /// How far the shape reaches in its own coordinates (those of the object holding it):
+    /// exact for every finite shape, [`Extent::Unbounded`] for a plane and for anything
+    /// that contains one. A group with no objects is [`Bounds::EMPTY`].
+    pub fn bounds(&self) -> Extent {
+        self.extent_under(None)
+    }
+
+    /// The extent after `to_parent` (`None`: the identity) maps the shape's points. Exact:
+    /// spheres become ellipsoids with their own box, triangles and meshes the box of their
+    /// mapped vertices (an affine map keeps convex hulls), nested transforms compose.
+    fn extent_under(&self, to_parent: Option<&DMat4>) -> Extent {
+        let map = |p: DVec3| to_parent.map_or(p, |m| m.transform_point3(p));
+        Extent::Bounded(match self {
+            Shape::Group(children) => {
+                let children = children.iter().map(|child| child.shape.extent_under(to_parent));
+                return children.fold(Extent::Bounded(Bounds::EMPTY), |all, child| all.union(&child));
+            }
+            Shape::Transform { matrix, child } => {
+                let composed = to_parent.map_or(*matrix, |m| *m * *matrix);
+                return child.shape.extent_under(Some(&composed));
+            }
+            Shape::Plane { .. } => return Extent::Unbounded,
+            Shape::Sphere { center, radius, .. } => match to_parent {
+                None => Bounds::sphere(*center, *radius),
+                // The unit sphere carried by to_parent · T(center) · S(radius).
+                Some(m) => Bounds::ellipsoid(
+                    &(*m * DMat4::from_translation(*center) * DMat4::from_scale(DVec3::splat(*radius))),
+                ),
+            },
+            Shape::Triangle { vertices, .. } => Bounds::of_points(vertices.map(map)),
+            Shape::Mesh { mesh, .. } => Bounds::of_points(mesh.positions.iter().map(|&p| map(p))),
+        })
+    }
+}
+
+impl Object {
+    /// [`Shape::bounds`] of this object.
+    pub fn bounds(&self) -> Extent {
+        self.shape.bounds()
+    }
 }
 
 /// How many primitives of each kind a scene holds (mesh triangles counted one by one).
@@ -166,6 +318,12 @@ impl PrimitiveCounts {
 }
 
 impl Scene {
+    /// How far the scene reaches in world space: the union of its objects' extents
+    /// ([`Shape::bounds`]); unbounded as soon as it has a plane.
+    pub fn bounds(&self) -> Extent {
+        self.root.iter().fold(Extent::Bounded(Bounds::EMPTY), |all, object| all.union(&object.bounds()))
+    }
+
     pub fn primitive_counts(&self) -> PrimitiveCounts {
         let mut counts = PrimitiveCounts::default();
         let mut pending: Vec<&Object> = self.root.iter().collect();
@@ -180,5 +338,179 @@ impl Scene {
             }
         }
         counts
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn object(shape: Shape) -> Object {
+        Object { shape, location: Location::default() }
+    }
+
+    fn transform(matrix: DMat4, shape: Shape) -> Shape {
+        Shape::Transform { matrix, child: Box::new(object(shape)) }
+    }
+
+    fn sphere(center: DVec3, radius: f64) -> Shape {
+        Shape::Sphere { center, radius, material: 0 }
+    }
+
+    fn bounded(extent: Extent) -> Bounds {
+        extent.bounds().expect("bounded")
+    }
+
+    fn assert_close(actual: Bounds, expected: Bounds) {
+        let error = (actual.min - expected.min).abs().max((actual.max - expected.max).abs()).max_element();
+        assert!(error <= 1e-12, "{actual:?} vs {expected:?}");
+    }
+
+    #[test]
+    fn sphere_bounds() {
+        let bounds = bounded(sphere(DVec3::new(1.0, 2.0, 3.0), 2.0).bounds());
+        assert_eq!(bounds, Bounds { min: DVec3::new(-1.0, 0.0, 1.0), max: DVec3::new(3.0, 4.0, 5.0) });
+    }
+
+    /// The sphere of centre (1, 0, 0) and radius 1 under `ZRotate 45` then `Scale 2 1 3`
+    /// (M = R·S): S makes the ellipsoid of centre (2, 0, 0) and semi-axes 2, 1, 3; R turns it
+    /// by 45° about z, so its centre goes to (√2, √2, 0) and its half-extent along x (and y)
+    /// is √(2²·cos²45° + 1²·sin²45°) = √2.5; along z it stays 3.
+    #[test]
+    fn sphere_under_rotation_and_non_uniform_scale() {
+        let matrix = DMat4::from_rotation_z(45f64.to_radians()) * DMat4::from_scale(DVec3::new(2.0, 1.0, 3.0));
+        let shape = transform(matrix, sphere(DVec3::X, 1.0));
+        let (c, h) = (2f64.sqrt(), 2.5f64.sqrt());
+        let expected = Bounds { min: DVec3::new(c - h, c - h, -3.0), max: DVec3::new(c + h, c + h, 3.0) };
+        assert_close(bounded(shape.bounds()), expected);
+        // Tight: points of the surface reach each face of the box, and none leaves it.
+        let mut reached = Bounds::EMPTY;
+        for i in 0..=200 {
+            for j in 0..=400 {
+                let (theta, phi) = (std::f64::consts::PI * i as f64 / 200.0, std::f64::consts::TAU * j as f64 / 400.0);
+                let u = DVec3::new(theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos());
+                reached = reached.union(&Bounds::of_points([matrix.transform_point3(DVec3::X + u)]));
+            }
+        }
+        assert!(reached.min.cmpge(expected.min - 1e-12).all() && reached.max.cmple(expected.max + 1e-12).all());
+        assert!((reached.min - expected.min).abs().max((reached.max - expected.max).abs()).max_element() < 1e-3);
+    }
+
+    #[test]
+    fn triangle_bounds_plain_and_transformed() {
+        let vertices = [DVec3::ZERO, DVec3::new(1.0, 0.0, 0.0), DVec3::new(0.0, 2.0, -1.0)];
+        let triangle = Shape::Triangle { vertices, material: 0 };
+        assert_eq!(
+            bounded(triangle.bounds()),
+            Bounds { min: DVec3::new(0.0, 0.0, -1.0), max: DVec3::new(1.0, 2.0, 0.0) }
+        );
+        // x ↦ 2x + 1 on every axis, then a quarter turn about z: (x, y, z) ↦ (−y, x, z).
+        let matrix = DMat4::from_rotation_z(90f64.to_radians())
+            * DMat4::from_translation(DVec3::ONE)
+            * DMat4::from_scale(DVec3::splat(2.0));
+        // Mapped vertices: (−1, 1, 1), (−1, 3, 1), (−5, 1, −1).
+        let expected = Bounds { min: DVec3::new(-5.0, 1.0, -1.0), max: DVec3::new(-1.0, 3.0, 1.0) };
+        assert_close(bounded(transform(matrix, triangle).bounds()), expected);
+    }
+
+    #[test]
+    fn mesh_bounds() {
+        let positions =
+            vec![DVec3::new(1.0, -2.0, 0.5), DVec3::new(-3.0, 4.0, 0.0), DVec3::new(0.0, 0.0, 7.0), DVec3::ZERO];
+        let mesh = Arc::new(Mesh { path: PathBuf::new(), positions, triangles: vec![[0, 1, 2], [0, 2, 3]] });
+        let expected = Bounds { min: DVec3::new(-3.0, -2.0, 0.0), max: DVec3::new(1.0, 4.0, 7.0) };
+        assert_eq!(mesh.bounds(), expected);
+        assert_eq!(bounded(Shape::Mesh { mesh: mesh.clone(), material: 0 }.bounds()), expected);
+        let moved = transform(DMat4::from_translation(DVec3::new(10.0, 0.0, 0.0)), Shape::Mesh { mesh, material: 0 });
+        assert_eq!(
+            bounded(moved.bounds()),
+            Bounds { min: expected.min + DVec3::X * 10.0, max: expected.max + DVec3::X * 10.0 }
+        );
+        let empty = Mesh::default().bounds();
+        assert!(empty.is_empty() && empty == Bounds::EMPTY);
+    }
+
+    #[test]
+    fn planes_are_unbounded_and_groups_fold() {
+        let plane = Shape::Plane { normal: DVec3::Y, offset: -1.0, material: 0 };
+        assert_eq!(plane.bounds(), Extent::Unbounded);
+        let rotated = transform(DMat4::from_rotation_x(0.3), plane.clone());
+        assert_eq!(rotated.bounds(), Extent::Unbounded);
+        assert_eq!(Shape::Group(Vec::new()).bounds(), Extent::Bounded(Bounds::EMPTY));
+        let a = sphere(DVec3::ZERO, 1.0);
+        let b = transform(DMat4::from_translation(DVec3::new(5.0, 0.0, 0.0)), sphere(DVec3::ZERO, 2.0));
+        let group = Shape::Group(vec![object(a.clone()), object(b.clone())]);
+        let union = Bounds { min: DVec3::new(-1.0, -2.0, -2.0), max: DVec3::new(7.0, 2.0, 2.0) };
+        assert_close(bounded(group.bounds()), union);
+        assert_eq!(Shape::Group(vec![object(a), object(b), object(plane)]).bounds(), Extent::Unbounded);
+    }
+
+    #[test]
+    fn nested_transforms_compose() {
+        // Outer translation of the inner scale: the unit sphere becomes radius 2 around (10, 0, 0).
+        let inner = transform(DMat4::from_scale(DVec3::splat(2.0)), sphere(DVec3::ZERO, 1.0));
+        let outer = transform(DMat4::from_translation(DVec3::new(10.0, 0.0, 0.0)), inner);
+        let expected = Bounds { min: DVec3::new(8.0, -2.0, -2.0), max: DVec3::new(12.0, 2.0, 2.0) };
+        assert_close(bounded(outer.bounds()), expected);
+    }
+
+    #[test]
+    fn scene_bounds_fold_the_root() {
+        let camera = "OrthographicCamera { center 0 0 10 direction 0 0 -1 up 0 1 0 size 5 }";
+        let materials = "Materials { numMaterials 1 Material { diffuseColor 1 1 1 } }";
+        let objects = "Sphere { center 0 0 0 radius 1 }
+            Transform { Translate 0 3 0 Scale 1 2 1 Sphere { center 0 0 0 radius 1 } }
+            Triangle { vertex0 -4 0 0 vertex1 0 0 0 vertex2 0 0 -6 }";
+        let parse = |objects: &str, count: u32| {
+            let text = format!("{camera} {materials} Group {{ numObjects {count} MaterialIndex 0 {objects} }}");
+            crate::scene::parse_scene(&text, std::path::Path::new("bounds.txt")).unwrap()
+        };
+        let expected = Bounds { min: DVec3::new(-4.0, -1.0, -6.0), max: DVec3::new(1.0, 5.0, 1.0) };
+        assert_close(bounded(parse(objects, 3).bounds()), expected);
+        let with_plane = format!("{objects} Plane {{ normal 0 1 0 offset -1 }}");
+        assert_eq!(parse(&with_plane, 4).bounds(), Extent::Unbounded);
+    }
+
+    #[test]
+    fn camera_basis_is_validated_once() {
+        // direction (0, 0, −2) → (0, 0, −1); up (0, 3, −1) loses its component along it,
+        // (0, 3, 0) → (0, 1, 0); horizontal = direction × up = (1, 0, 0).
+        let basis = CameraBasis::new(DVec3::new(0.0, 0.0, -2.0), DVec3::new(0.0, 3.0, -1.0)).unwrap();
+        assert_eq!(basis, CameraBasis { direction: -DVec3::Z, up: DVec3::Y, horizontal: DVec3::X });
+        let ortho = Projection::Orthographic { size: 1.0 };
+        let camera = Camera::new(
+            ortho,
+            DVec3::ZERO,
+            DVec3::new(0.0, 0.0, -2.0),
+            DVec3::new(0.0, 3.0, -1.0),
+            Location::default(),
+        )
+        .unwrap();
+        assert_eq!(*camera.frame(), basis);
+        assert_eq!(
+            (camera.direction, camera.up),
+            (DVec3::new(0.0, 0.0, -2.0), DVec3::new(0.0, 3.0, -1.0)),
+            "kept as written"
+        );
+
+        // Any basis that exists is orthonormal and right-handed.
+        let tilted = CameraBasis::new(DVec3::new(1.0, -2.0, 0.5), DVec3::new(0.3, 1.0, 4.0)).unwrap();
+        let [d, u, h] = [tilted.direction, tilted.up, tilted.horizontal];
+        for (x, y) in [(d, u), (u, h), (h, d)] {
+            assert!(x.dot(y).abs() < 1e-15 && (x.length() - 1.0).abs() < 1e-15);
+        }
+        assert!((d.cross(u) - h).length() < 1e-15);
+
+        // No frame, no camera: up ∥ direction, a zero vector, or one f64 cannot normalise.
+        for (direction, up) in [
+            (DVec3::new(0.0, 0.0, -1.0), DVec3::new(0.0, 0.0, 2.0)),
+            (DVec3::new(1.0, 1.0, 0.0), DVec3::new(-3.0, -3.0, 0.0)),
+            (DVec3::ZERO, DVec3::Y),
+            (DVec3::Z, DVec3::ZERO),
+            (DVec3::new(1e-200, 0.0, 0.0), DVec3::Y),
+        ] {
+            assert_eq!(CameraBasis::new(direction, up), None, "{direction} {up}");
+            assert_eq!(Camera::new(ortho, DVec3::ZERO, direction, up, Location::default()), None);
+        }
     }
 }

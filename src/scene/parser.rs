@@ -1,4 +1,4 @@
-//! Recursive-descent parser for the scene format (SPEC §2).
+//! Recursive-descent parser for the scene format (docs/SPEC.md §2).
 //!
 //! One function per grammar rule, except that the one rule that nests (Group/Transform
 //! objects) keeps its open blocks on an explicit stack instead of recursing, so no input
@@ -29,10 +29,10 @@ pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
     parse_scene(&text, path)
 }
 
-/// Parses scene text (SPEC §2). `path` is the file the text came from: it names the file in
-/// error messages and is the folder `obj_file` paths are resolved against (before the
-/// working directory). OBJ meshes are loaded while parsing; a mesh used twice is loaded once
-/// and shared.
+/// Parses scene text (docs/SPEC.md §2). `path` is the file the text came from: it names the
+/// file in error messages and is the folder `obj_file` paths are resolved against (before
+/// the working directory). OBJ meshes are loaded while parsing; a mesh used twice is loaded
+/// once and shared.
 ///
 /// Transforms compose as `M = T1 · T2 · … · Tn` (the first listed is applied last), except
 /// `Matrix { … }`, which pre-multiplies (`M = Matrix · M_so_far`) as the course's reference
@@ -413,21 +413,15 @@ impl<'a> Parser<'a> {
         })?;
         let extent = self.required(extent, keyword, extent_field, close)?;
         let (up, up_location) = self.required(up, keyword, "up", close)?;
-        let camera = Camera {
-            projection: if perspective {
-                Projection::Perspective { angle: extent }
-            } else {
-                Projection::Orthographic { size: extent }
-            },
-            center: self.required(center, keyword, "center", close)?,
-            direction: self.required(direction, keyword, "direction", close)?,
-            up,
-            location: keyword.location,
+        let projection = if perspective {
+            Projection::Perspective { angle: extent }
+        } else {
+            Projection::Orthographic { size: extent }
         };
-        if camera.basis().is_none() {
-            return Err(self.error(up_location, degenerate_camera_message(&camera)));
-        }
-        Ok(camera)
+        let center = self.required(center, keyword, "center", close)?;
+        let direction = self.required(direction, keyword, "direction", close)?;
+        Camera::new(projection, center, direction, up, keyword.location)
+            .ok_or_else(|| self.error(up_location, degenerate_camera_message(direction, up)))
     }
 
     /// A perspective camera's `angle`: degrees in the file, radians in the model.
@@ -860,20 +854,16 @@ fn singularity(matrix: &DMat4) -> Option<String> {
     (!invertible).then(|| format!("singular transform (determinant {determinant:e}, too close to 0)"))
 }
 
-/// Why [`Camera::basis`] failed: almost always `up` ∥ `direction`; otherwise (both checked
-/// after scaling to unit size, so extremes cannot hide the answer) a vector f64 cannot
-/// normalise, such as `1e-200 0 0`.
-fn degenerate_camera_message(camera: &Camera) -> String {
+/// Why a camera has no frame ([`CameraBasis::new`](super::model::CameraBasis::new) failed):
+/// almost always `up` ∥ `direction`; otherwise (both checked after scaling to unit size, so
+/// extremes cannot hide the answer) a vector f64 cannot normalise, such as `1e-200 0 0`.
+fn degenerate_camera_message(direction: DVec3, up: DVec3) -> String {
     let unit_scale = |v: DVec3| v / v.abs().max_element();
-    let (up, direction) = (unit_scale(camera.up), unit_scale(camera.direction));
-    if up.cross(direction).length() <= 1e-12 * up.length() {
-        format!("up ({}) is parallel to direction ({})", show(camera.up), show(camera.direction))
+    let (unit_up, unit_direction) = (unit_scale(up), unit_scale(direction));
+    if unit_up.cross(unit_direction).length() <= 1e-12 * unit_up.length() {
+        format!("up ({}) is parallel to direction ({})", show(up), show(direction))
     } else {
-        format!(
-            "direction ({}) and up ({}) are too large or too small to normalise",
-            show(camera.direction),
-            show(camera.up)
-        )
+        format!("direction ({}) and up ({}) are too large or too small to normalise", show(direction), show(up))
     }
 }
 

@@ -1,132 +1,19 @@
-//! The scene flattened into GPU-ready buffers: the host twins of the structs in
-//! `shaders/raycast.wgsl` (same size and field offsets, checked by a test against naga's
-//! reflection), and the walk over the scene tree that fills them.
+//! The walk over the scene tree that fills the kernel's buffers ([`super::layout`]).
 //!
 //! Transforms are baked on the CPU wherever that is exact: triangles and planes go to world
 //! space, spheres under a similarity become world spheres; only a sphere under a
-//! non-uniform scale keeps a matrix (an [`Ellipsoid`]). Everything is moved so that the
-//! camera sits at the origin, in f64, before it is rounded to f32.
+//! non-uniform scale keeps a matrix (an [`Ellipsoid`](super::layout::GpuEllipsoid)).
+//! Everything is moved so that the camera sits at the origin, in f64, before it is rounded
+//! to f32.
 
+use super::binning::{self, Bins};
+use super::layout::*;
+use super::{Acceleration, GpuOptions};
 use crate::bvh::{Aabb, Bvh, BvhNode};
 use crate::camera::PrimaryRays;
-use crate::render::{Frame, RenderOptions};
-use crate::scene::{Object, Scene, Shape};
-use bytemuck::{Pod, Zeroable};
+use crate::scene::{ellipsoid_extent, Object, Scene, Shape};
 use glam::{DMat3, DMat4, DVec3, Vec3};
 use std::time::Instant;
-
-/// WGSL `Params`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct Params {
-    pub direction: [f32; 3],
-    pub width: u32,
-    pub horizontal: [f32; 3],
-    pub height: u32,
-    pub up: [f32; 3],
-    pub first_row: u32,
-    pub background: [f32; 3],
-    pub tile_rows: u32,
-    pub ambient: [f32; 3],
-    pub _pad0: u32,
-    pub num_spheres: u32,
-    pub num_ellipsoids: u32,
-    pub num_planes: u32,
-    pub num_triangles: u32,
-}
-
-/// WGSL `Sphere`: a sphere in (camera-relative) world space.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct GpuSphere {
-    pub center: [f32; 3],
-    pub radius: f32,
-    pub material: u32,
-    pub _pad: [u32; 3],
-}
-
-/// WGSL `Ellipsoid`: rows of the affine map from world space to the unit sphere's space.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct GpuEllipsoid {
-    pub rows: [[f32; 4]; 3],
-    pub material: u32,
-    pub _pad: [u32; 3],
-}
-
-/// WGSL `Plane`: `normal · p = offset`, normal of unit length.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct GpuPlane {
-    pub normal: [f32; 3],
-    pub offset: f32,
-    pub material: u32,
-    pub _pad: [u32; 3],
-}
-
-/// WGSL `Triangle`: world-space vertices, wound so that `(v1 − v0) × (v2 − v0)` is the normal.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct GpuTriangle {
-    pub v0: [f32; 3],
-    pub material: u32,
-    pub v1: [f32; 3],
-    pub _pad0: u32,
-    pub v2: [f32; 3],
-    pub _pad1: u32,
-}
-
-/// WGSL `Light`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct GpuLight {
-    pub to_light: [f32; 3],
-    pub _pad0: u32,
-    pub color: [f32; 3],
-    pub _pad1: u32,
-}
-
-/// What the kernel writes per pixel (WGSL `write_pixel`): a hit flag word, then three words
-/// of colour, three of normal and one of depth, each only when that output is asked for.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub struct PixelLayout {
-    pub color: bool,
-    pub normal: bool,
-    pub depth: bool,
-}
-
-impl PixelLayout {
-    pub fn new(options: &RenderOptions) -> PixelLayout {
-        PixelLayout { color: options.color, normal: options.normals, depth: options.depth }
-    }
-
-    /// 32-bit words per pixel (the kernel's `PIXEL_WORDS`).
-    pub fn words(&self) -> u32 {
-        1 + 3 * self.color as u32 + 3 * self.normal as u32 + self.depth as u32
-    }
-
-    /// The frame of `rows` full rows that `words` (one tile, as read back) encode.
-    pub fn decode(&self, options: &RenderOptions, rows: u32, words: &[u32]) -> Frame {
-        let mut frame = Frame::new(&RenderOptions { height: rows, ..*options });
-        let f = |w: &[u32]| [f32::from_bits(w[0]), f32::from_bits(w[1]), f32::from_bits(w[2])];
-        for (k, pixel) in words.chunks_exact(self.words() as usize).enumerate() {
-            frame.hit[k] = pixel[0] != 0;
-            let mut w = 1;
-            if self.color {
-                frame.color[k] = f(&pixel[w..]);
-                w += 3;
-            }
-            if self.normal {
-                frame.normal[k] = f(&pixel[w..]);
-                w += 3;
-            }
-            if self.depth {
-                frame.depth[k] = f32::from_bits(pixel[w]);
-            }
-        }
-        frame
-    }
-}
 
 /// Everything the kernel reads, ready to upload.
 #[derive(Clone, Debug, Default)]
@@ -144,6 +31,8 @@ pub struct SceneBuffers {
     /// The hierarchy over spheres, ellipsoids and triangles, when the scene has enough of
     /// them to profit ([`BVH_MIN_PRIMITIVES`]).
     pub bvh: Option<GpuBvh>,
+    /// Screen-space bins of the finite primitives, when the frame walks those instead.
+    pub bins: Option<Bins>,
     /// Bounds of each sphere and ellipsoid (f32, slightly padded), for the hierarchy.
     sphere_bounds: Vec<Aabb>,
     ellipsoid_bounds: Vec<Aabb>,
@@ -154,6 +43,11 @@ pub struct SceneBuffers {
 /// at 1 and at ∞): 1 sphere 2.5 / 0.56, 6 primitives 2.8 / 1.2, 12 (the cube) 1.65 / 2.05,
 /// 24: 2.4 / 3.6, 48: 2.8 / 6.6, bunny_1k 4.1 / 127.
 pub const BVH_MIN_PRIMITIVES: usize = 8;
+
+/// Bins are used while a bin lists at most this many primitives on average (see
+/// [`Bins::mean_list_length`]); longer lists, as sub-pixel triangles make, go to the
+/// hierarchy.
+pub const BINS_MAX_MEAN_LIST: f64 = 64.0;
 
 /// The hierarchy as the kernel reads it.
 #[derive(Clone, Debug, Default)]
@@ -167,19 +61,14 @@ pub struct GpuBvh {
     pub build_ms: f64,
 }
 
-/// Primitive kinds in a `prim_refs` entry (the kernel's `REF_*` constants).
-pub const REF_TRIANGLE: u32 = 0;
-pub const REF_SPHERE: u32 = 1;
-pub const REF_ELLIPSOID: u32 = 2;
-
 impl SceneBuffers {
     /// Flattens `scene` for the image `rays` describes, with a hierarchy when it has at
     /// least `bvh_min_primitives` spheres, ellipsoids and triangles.
-    pub fn new(scene: &Scene, rays: &PrimaryRays, bvh_min_primitives: usize) -> SceneBuffers {
+    pub fn new(scene: &Scene, rays: &PrimaryRays, options: &GpuOptions) -> SceneBuffers {
         let mut buffers = SceneBuffers { orthographic: rays.orthographic, ..Default::default() };
         let to_camera = DMat4::from_translation(-rays.center);
         buffers.flatten(&scene.root, &to_camera);
-        buffers.bvh = buffers.build_bvh(bvh_min_primitives);
+        buffers.choose_acceleration(rays, options);
         if let Some(bvh) = buffers.bvh.as_ref().filter(|b| b.prim_refs.is_empty()) {
             buffers.triangles = bvh.order.iter().map(|&p| buffers.triangles[p as usize]).collect();
         }
@@ -205,9 +94,41 @@ impl SceneBuffers {
             num_ellipsoids: buffers.ellipsoids.len() as u32,
             num_planes: buffers.planes.len() as u32,
             num_triangles: buffers.triangles.len() as u32,
+            bin_columns: buffers.bins.as_ref().map_or(0, |b| b.columns),
             ..Default::default()
         };
         buffers
+    }
+
+    /// What the kernel walks to find candidates.
+    pub fn acceleration(&self) -> Acceleration {
+        if self.bins.is_some() {
+            Acceleration::Bins
+        } else if self.bvh.is_some() {
+            Acceleration::Hierarchy
+        } else {
+            Acceleration::Flat
+        }
+    }
+
+    /// Bins, a hierarchy or flat loops: what `options` asks for, or with
+    /// [`Acceleration::Auto`] the cost model's choice.
+    fn choose_acceleration(&mut self, rays: &PrimaryRays, options: &GpuOptions) {
+        let finite = self.triangles.len() + self.spheres.len() + self.ellipsoids.len();
+        if finite == 0 || options.acceleration == Acceleration::Flat {
+            return;
+        }
+        if matches!(options.acceleration, Acceleration::Auto | Acceleration::Bins) {
+            let candidates = binning::candidates(&self.triangles, &self.sphere_bounds, &self.ellipsoid_bounds);
+            let bins = Bins::build(rays, &self.triangles, &candidates);
+            if options.acceleration == Acceleration::Bins || bins.mean_list_length() <= BINS_MAX_MEAN_LIST {
+                self.bins = Some(bins);
+                return;
+            }
+        }
+        let min_primitives =
+            if options.acceleration == Acceleration::Hierarchy { 1 } else { options.bvh_min_primitives };
+        self.bvh = self.build_bvh(min_primitives);
     }
 
     fn build_bvh(&self, min_primitives: usize) -> Option<GpuBvh> {
@@ -277,9 +198,8 @@ impl SceneBuffers {
         // the kernel needs the inverse of that.
         let to_world = *matrix * DMat4::from_translation(center) * DMat4::from_scale(DVec3::splat(radius));
         let to_unit = to_world.inverse();
-        // The image of the unit sphere under A reaches |row i of A's linear part| along axis i.
-        let half = DVec3::from_array([0, 1, 2].map(|r| to_world.row(r).truncate().length()));
-        self.ellipsoid_bounds.push(padded_box(to_world.w_axis.truncate(), half));
+        let (center, half) = ellipsoid_extent(&to_world);
+        self.ellipsoid_bounds.push(padded_box(center, half));
         let rows = [0, 1, 2].map(|r| to_unit.row(r).as_vec4().to_array());
         self.ellipsoids.push(GpuEllipsoid { rows, material, ..Default::default() });
     }
@@ -298,7 +218,7 @@ impl SceneBuffers {
     }
 
     /// A mirroring transform (det < 0) reverses the winding of mapped vertices, while the
-    /// SPEC's normal `normalise(M⁻ᵀ·n)` does not flip; swapping two vertices keeps them equal.
+    /// normal of docs/SPEC.md §4, `normalise(M⁻ᵀ·n)`, does not flip; swapping two vertices keeps them equal.
     fn push_triangle(&mut self, matrix: &DMat4, vertices: &[DVec3; 3], material: u32) {
         let [a, mut b, mut c] = vertices.map(|v| f32x3(matrix.transform_point3(v)));
         if DMat3::from_mat4(*matrix).determinant() < 0.0 {

@@ -1,0 +1,271 @@
+//! Screen-space bins for primary rays: every primitive is listed in the 8×8-pixel tiles its
+//! conservative screen bounds cover, nearest first, so a workgroup (one tile) walks one
+//! short list that is the same for all its invocations. On lavapipe, where every branch of a
+//! divergent loop is paid for by all lanes (docs/lavapipe.md), a uniform list beats a
+//! per-ray hierarchy walk; on a real GPU it is the coherent access pattern they favour too.
+//!
+//! Which pixels hit what does not change: each invocation still intersects its own ray with
+//! every candidate exactly, and a candidate is left out of a tile only when its bounds
+//! provably miss every ray of the tile. Lists are sorted by a lower bound of the distance at
+//! which a ray can meet the primitive, so a ray stops once its closest hit is nearer than the
+//! next candidate could be.
+//!
+//! Triangles are tested against the rays' shared origin (perspective) or direction
+//! (orthographic) with edge planes computed once per frame ([`EyeTriangle`]).
+
+use super::layout::{BinItem, EyeTriangle, GpuTriangle, REF_ELLIPSOID, REF_SPHERE, REF_TRIANGLE};
+use crate::bvh::Aabb;
+use crate::camera::PrimaryRays;
+use glam::{DVec3, Vec3};
+
+/// Pixels on a side of a bin: the kernel's workgroup.
+pub const BIN_SIDE: u32 = super::WORKGROUP;
+
+/// Pixels of padding around each primitive's projected bounds: the f32 rays of the kernel
+/// deviate from the exact ones by far less than a pixel.
+const PAD_PIXELS: f64 = 1.0;
+
+/// The bins of one frame.
+#[derive(Clone, Debug, Default)]
+pub struct Bins {
+    /// Bin columns (tiles per image row).
+    pub columns: u32,
+    /// Per bin, `[first, count]` into `items`; bins are numbered row by row from the top.
+    pub ranges: Vec<[u32; 2]>,
+    pub items: Vec<BinItem>,
+    /// Per triangle, its edge planes and plane (same index as the triangle).
+    pub eye_triangles: Vec<EyeTriangle>,
+    pub build_ms: f64,
+}
+
+/// A finite primitive to bin: its reference (`kind << 30 | index`) and its bounds.
+pub struct Candidate {
+    pub reference: u32,
+    pub bounds: Aabb,
+    /// Exact corners to project instead of the box's (a triangle's vertices).
+    pub points: Option<[Vec3; 3]>,
+}
+
+impl Bins {
+    /// Bins `candidates` for the image `rays` describes.
+    pub fn build(rays: &PrimaryRays, triangles: &[GpuTriangle], candidates: &[Candidate]) -> Bins {
+        let start = std::time::Instant::now();
+        let projector = Projector::new(rays);
+        let columns = rays.width.div_ceil(BIN_SIDE);
+        let bin_rows = rays.height.div_ceil(BIN_SIDE);
+        // (near, reference, tile rect) of every primitive some ray may meet.
+        let mut placed: Vec<(f32, u32, [u32; 4])> = Vec::with_capacity(candidates.len());
+        for c in candidates {
+            let corners = match c.points {
+                Some(p) => p.to_vec(),
+                None => box_corners(&c.bounds),
+            };
+            let Some(rect) = projector.pixel_rect(&corners) else { continue };
+            let tiles = [rect[0] / BIN_SIDE, rect[1] / BIN_SIDE, rect[2] / BIN_SIDE, rect[3] / BIN_SIDE];
+            placed.push((projector.near_bound(&c.bounds), c.reference, tiles));
+        }
+        placed.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let mut counts = vec![0u32; (columns * bin_rows) as usize];
+        for (_, _, [c0, r0, c1, r1]) in &placed {
+            for row in *r0..=*r1 {
+                for col in *c0..=*c1 {
+                    counts[(row * columns + col) as usize] += 1;
+                }
+            }
+        }
+        let mut ranges = Vec::with_capacity(counts.len());
+        let mut total = 0u32;
+        for &count in &counts {
+            ranges.push([total, count]);
+            total += count;
+        }
+        let mut items = vec![BinItem::default(); total as usize];
+        let mut fill: Vec<u32> = ranges.iter().map(|r| r[0]).collect();
+        for &(near, reference, [c0, r0, c1, r1]) in &placed {
+            for row in r0..=r1 {
+                for col in c0..=c1 {
+                    let slot = &mut fill[(row * columns + col) as usize];
+                    items[*slot as usize] = BinItem { reference, near };
+                    *slot += 1;
+                }
+            }
+        }
+        let eye_triangles =
+            triangles.iter().map(|t| EyeTriangle::new(t, rays.orthographic, projector.direction)).collect();
+        Bins { columns, ranges, items, eye_triangles, build_ms: start.elapsed().as_secs_f64() * 1e3 }
+    }
+
+    /// Candidates an invocation tests on average (each pixel of a bin tests the whole list
+    /// at worst): the cost model compares this with the hierarchy.
+    pub fn mean_list_length(&self) -> f64 {
+        self.items.len() as f64 / self.ranges.len().max(1) as f64
+    }
+}
+
+/// The finite primitives of a flattened scene, for [`Bins::build`].
+pub fn candidates(triangles: &[GpuTriangle], sphere_bounds: &[Aabb], ellipsoid_bounds: &[Aabb]) -> Vec<Candidate> {
+    let mut out = Vec::with_capacity(triangles.len() + sphere_bounds.len() + ellipsoid_bounds.len());
+    for (k, t) in triangles.iter().enumerate() {
+        let points = [Vec3::from(t.v0), Vec3::from(t.v1), Vec3::from(t.v2)];
+        out.push(Candidate {
+            reference: REF_TRIANGLE << 30 | k as u32,
+            bounds: Aabb::of_points(&points),
+            points: Some(points),
+        });
+    }
+    for (k, b) in sphere_bounds.iter().enumerate() {
+        out.push(Candidate { reference: REF_SPHERE << 30 | k as u32, bounds: *b, points: None });
+    }
+    for (k, b) in ellipsoid_bounds.iter().enumerate() {
+        out.push(Candidate { reference: REF_ELLIPSOID << 30 | k as u32, bounds: *b, points: None });
+    }
+    out
+}
+
+fn box_corners(b: &Aabb) -> Vec<Vec3> {
+    (0..8)
+        .map(|k| {
+            Vec3::new(
+                if k & 1 == 0 { b.min.x } else { b.max.x },
+                if k & 2 == 0 { b.min.y } else { b.max.y },
+                if k & 4 == 0 { b.min.z } else { b.max.z },
+            )
+        })
+        .collect()
+}
+
+/// From camera-relative points to pixel coordinates, in f64.
+struct Projector {
+    orthographic: bool,
+    /// Unit viewing direction.
+    direction: DVec3,
+    /// The camera's scaled axes (docs/SPEC.md §3): the ray through screen point (x, y) is
+    /// `direction·D + x·horizontal + y·up` (perspective) or starts at `x·horizontal + y·up`.
+    forward: DVec3,
+    horizontal: DVec3,
+    up: DVec3,
+    width: u32,
+    height: u32,
+}
+
+impl Projector {
+    fn new(rays: &PrimaryRays) -> Projector {
+        Projector {
+            orthographic: rays.orthographic,
+            direction: rays.direction.normalize(),
+            forward: rays.direction,
+            horizontal: rays.horizontal,
+            up: rays.up,
+            width: rays.width,
+            height: rays.height,
+        }
+    }
+
+    /// The screen point (x, y) a camera-relative point is seen at, or `None` at or behind the
+    /// eye plane (perspective).
+    fn screen(&self, p: DVec3) -> Option<(f64, f64)> {
+        let h = p.dot(self.horizontal) / self.horizontal.length_squared();
+        let u = p.dot(self.up) / self.up.length_squared();
+        if self.orthographic {
+            return Some((h, u));
+        }
+        // p = s·(forward + x·horizontal + y·up) with the three axes orthogonal.
+        let s = p.dot(self.forward) / self.forward.length_squared();
+        if s <= 0.0 {
+            return None;
+        }
+        Some((h / s, u / s))
+    }
+
+    /// The inclusive pixel rectangle `[col0, row0, col1, row1]` (rows from the top) that
+    /// holds every pixel whose ray may meet the convex hull of `points`, or `None` when no
+    /// pixel's can. Perspective projection maps the hull of points in front of the eye onto
+    /// the hull of their images, so their extremes bound it; a hull reaching the eye plane
+    /// may be seen anywhere.
+    fn pixel_rect(&self, points: &[Vec3]) -> Option<[u32; 4]> {
+        let full = [0, 0, self.width - 1, self.height - 1];
+        let (mut x0, mut y0, mut x1, mut y1) = (f64::MAX, f64::MAX, f64::MIN, f64::MIN);
+        for p in points {
+            let p = p.as_dvec3();
+            if !p.is_finite() {
+                return Some(full);
+            }
+            match self.screen(p) {
+                Some((x, y)) => {
+                    x0 = x0.min(x);
+                    x1 = x1.max(x);
+                    y0 = y0.min(y);
+                    y1 = y1.max(y);
+                }
+                // In front of the eye only partly (or not at all: then no ray meets it,
+                // but listing it everywhere is still correct).
+                None => return Some(full),
+            }
+        }
+        // Pixel i's centre sits at x = (i + ½ − W/2)/longer (docs/SPEC.md §3).
+        let longer = self.width.max(self.height) as f64;
+        let to_column = |x: f64| x * longer + self.width as f64 / 2.0 - 0.5;
+        let to_j = |y: f64| y * longer + self.height as f64 / 2.0 - 0.5;
+        let (i0, i1) = ((to_column(x0) - PAD_PIXELS).floor(), (to_column(x1) + PAD_PIXELS).ceil());
+        let (j0, j1) = ((to_j(y0) - PAD_PIXELS).floor(), (to_j(y1) + PAD_PIXELS).ceil());
+        if i1 < 0.0 || j1 < 0.0 || i0 > (self.width - 1) as f64 || j0 > (self.height - 1) as f64 {
+            return None;
+        }
+        let clamp = |v: f64, hi: u32| v.clamp(0.0, hi as f64) as u32;
+        let (c0, c1) = (clamp(i0, self.width - 1), clamp(i1, self.width - 1));
+        // j counts from the bottom, image rows from the top.
+        let (r0, r1) = (self.height - 1 - clamp(j1, self.height - 1), self.height - 1 - clamp(j0, self.height - 1));
+        Some([c0, r0, c1, r1])
+    }
+
+    /// A lower bound of the `t` at which any primary ray meets something inside `bounds`:
+    /// perspective rays are unit and start at the eye, so `t` is the distance to the eye,
+    /// at least the box's; orthographic `t` is the depth along the unit direction, at least
+    /// the smallest corner's. Rounded down (and widened by 2⁻²⁰ of its size, far more
+    /// than the kernel's own rounding of `t`) so the kernel's early stop never skips a
+    /// candidate it could have hit first.
+    fn near_bound(&self, bounds: &Aabb) -> f32 {
+        let (min, max) = (bounds.min.as_dvec3(), bounds.max.as_dvec3());
+        let near = if self.orthographic {
+            box_corners(bounds).iter().map(|c| c.as_dvec3().dot(self.direction)).fold(f64::MAX, f64::min)
+        } else {
+            DVec3::ZERO.clamp(min, max).length()
+        };
+        let widened = near - near.abs() * (1.0 / (1 << 20) as f64);
+        let rounded = widened as f32;
+        if (rounded as f64) > widened {
+            rounded.next_down()
+        } else {
+            rounded
+        }
+    }
+}
+
+impl EyeTriangle {
+    /// Edge planes through the rays' common origin (perspective: the eye at the origin) or
+    /// containing their common direction (orthographic), and the triangle's plane, in f64
+    /// from the f32 vertices, then rounded.
+    ///
+    /// Watertight for the same reason as Woop, Benthin and Wald's test (JCGT 2013): an edge
+    /// shared by two triangles gets the same plane with the opposite sign in both, bit for
+    /// bit (a cross product and a dot product of reversed arguments negate exactly, and the
+    /// offset is taken from the edge's lexicographically smaller end whichever way it is
+    /// walked), so the kernel's edge functions for a ray are exact negations of each other
+    /// and no ray slips between the two.
+    pub fn new(t: &GpuTriangle, orthographic: bool, direction: DVec3) -> EyeTriangle {
+        let [a, b, c] = [t.v0, t.v1, t.v2].map(|v| Vec3::from(v).as_dvec3());
+        let edge = |p: DVec3, q: DVec3| -> [f32; 4] {
+            if orthographic {
+                let n = (q - p).cross(direction);
+                let anchor = if (p.x, p.y, p.z) < (q.x, q.y, q.z) { p } else { q };
+                [n.x as f32, n.y as f32, n.z as f32, n.dot(anchor) as f32]
+            } else {
+                let n = p.cross(q);
+                [n.x as f32, n.y as f32, n.z as f32, 0.0]
+            }
+        };
+        let normal = (b - a).cross(c - a);
+        let plane = [normal.x as f32, normal.y as f32, normal.z as f32, normal.dot(a) as f32];
+        EyeTriangle { edges: [edge(b, c), edge(c, a), edge(a, b)], plane }
+    }
+}

@@ -1,0 +1,348 @@
+//! A scene uploaded and bound once, then rendered tile by tile with the same buffers, bind
+//! groups and pipeline (as wgpu's `repeated_compute` example keeps its own).
+//!
+//! Two sets of per-tile buffers take turns: a thread of ours submits tile k + 1 and waits for
+//! it while the caller's thread decodes and writes tile k, so the host's share of the work
+//! (decoding, quantising, writing files) overlaps the device's instead of following it.
+
+use super::flatten::SceneBuffers;
+use super::layout::{Params, PixelLayout};
+use super::{GpuError, GpuRenderer, KernelConfig, RenderStats, Timer, BINDINGS, OUTPUT_BINDING, WORKGROUP};
+use crate::render::{row_tiles, Frame, RenderOptions};
+use crate::scene::Scene;
+use std::sync::mpsc::sync_channel;
+use wgpu::util::DeviceExt;
+
+/// A scene ready on the device for one image size and set of outputs.
+pub struct PreparedScene<'a> {
+    gpu: &'a GpuRenderer,
+    pipeline: wgpu::ComputePipeline,
+    layout: PixelLayout,
+    params: Params,
+    options: RenderOptions,
+    tile_rows: u32,
+    slots: Vec<Slot>,
+    stats: RenderStats,
+}
+
+/// The buffers one tile in flight uses.
+struct Slot {
+    params: wgpu::Buffer,
+    output: wgpu::Buffer,
+    readback: wgpu::Buffer,
+    bind_group: wgpu::BindGroup,
+    timer: Option<Timer>,
+}
+
+/// One tile as the kernel wrote it: `rows` full image rows from `first_row` (from the top).
+pub struct PackedTile<'a> {
+    pub first_row: u32,
+    pub rows: u32,
+    width: u32,
+    layout: PixelLayout,
+    options: &'a RenderOptions,
+    words: &'a [u32],
+}
+
+/// What a packed depth word holds where the ray hit nothing (a NaN no kernel computes).
+const PACKED_MISS: u32 = u32::MAX;
+
+impl<'a> PreparedScene<'a> {
+    pub(super) fn new(
+        gpu: &'a GpuRenderer,
+        scene: &Scene,
+        options: &RenderOptions,
+        layout: PixelLayout,
+    ) -> Result<PreparedScene<'a>, GpuError> {
+        let start = std::time::Instant::now();
+        let rays = crate::camera::PrimaryRays::for_camera(&scene.camera, options.width, options.height);
+        let buffers = SceneBuffers::new(scene, &rays, &gpu.options);
+        let pipeline = gpu.pipeline(KernelConfig::new(&buffers, layout, options));
+        let inputs = upload_inputs(gpu, &buffers)?;
+        let tile_rows = gpu.tile_rows(options.width, &layout)?;
+        let tiles = options.height.div_ceil(tile_rows);
+        let tile_bytes = options.width as u64 * tile_rows as u64 * layout.words() as u64 * 4;
+        let slots = (0..tiles.min(2)).map(|_| Slot::new(gpu, &inputs, tile_bytes)).collect();
+        let scene_bytes = inputs.iter().flatten().map(|b| b.size()).sum();
+        Ok(PreparedScene {
+            gpu,
+            pipeline,
+            layout,
+            params: buffers.params,
+            options: *options,
+            tile_rows,
+            slots,
+            stats: RenderStats {
+                kernel_ns: gpu.timestamps.then_some(0),
+                tiles: 0,
+                bvh_build_ms: buffers.bvh.as_ref().map(|b| b.build_ms).or(buffers.bins.as_ref().map(|b| b.build_ms)),
+                prepare_ms: start.elapsed().as_secs_f64() * 1e3,
+                scene_bytes,
+                acceleration: buffers.acceleration(),
+            },
+        })
+    }
+
+    /// Renders every tile, top first, handing each to `on_tile` on the calling thread.
+    pub fn render<E: From<GpuError>>(
+        &self,
+        on_tile: impl FnMut(&PackedTile) -> Result<(), E>,
+    ) -> Result<RenderStats, E> {
+        self.render_band(0, self.options.height, on_tile)
+    }
+
+    /// As [`PreparedScene::render`], for image rows `first .. first + rows` only (a band of
+    /// a render split across machines); tiles still carry image row numbers.
+    pub fn render_band<E: From<GpuError>>(
+        &self,
+        first: u32,
+        rows: u32,
+        mut on_tile: impl FnMut(&PackedTile) -> Result<(), E>,
+    ) -> Result<RenderStats, E> {
+        assert!(first + rows <= self.options.height, "the band lies inside the image");
+        let tiles: Vec<(u32, u32)> = row_tiles(rows, self.tile_rows).map(|(offset, n)| (first + offset, n)).collect();
+        let mut stats = self.stats;
+        std::thread::scope(|scope| {
+            let (ready_tx, ready_rx) = sync_channel(self.slots.len());
+            let (free_tx, free_rx) = sync_channel::<usize>(self.slots.len());
+            for k in 0..self.slots.len() {
+                free_tx.send(k).expect("the receiver is alive");
+            }
+            let submitter = tiles.clone();
+            scope.spawn(move || {
+                for (first_row, rows) in submitter {
+                    // The caller stopped (an error, or all tiles done): nothing more to submit.
+                    let Ok(slot) = free_rx.recv() else { return };
+                    let result = self.run_tile(slot, first_row, rows);
+                    let failed = result.is_err();
+                    if ready_tx.send(result.map(|ns| (slot, first_row, rows, ns))).is_err() || failed {
+                        return;
+                    }
+                }
+            });
+            for _ in &tiles {
+                let (slot, first_row, rows, kernel_ns) =
+                    ready_rx.recv().map_err(|e| GpuError::Readback(e.to_string()))??;
+                self.hand_over(slot, first_row, rows, &mut on_tile)?;
+                stats.kernel_ns = stats.kernel_ns.zip(kernel_ns).map(|(a, b)| a + b);
+                stats.tiles += 1;
+                // The submitter may already have finished; then nobody needs the slot back.
+                let _ = free_tx.send(slot);
+            }
+            Ok(stats)
+        })
+    }
+
+    /// Shows the caller the mapped tile, then gives the buffer back to the device.
+    fn hand_over<E: From<GpuError>>(
+        &self,
+        slot: usize,
+        first_row: u32,
+        rows: u32,
+        on_tile: &mut impl FnMut(&PackedTile) -> Result<(), E>,
+    ) -> Result<(), E> {
+        let readback = &self.slots[slot].readback;
+        let range = readback.slice(..self.tile_bytes(rows));
+        let result = {
+            let view = range.get_mapped_range().map_err(|e| GpuError::Readback(e.to_string()))?;
+            let words: &[u32] = bytemuck::cast_slice(&view);
+            on_tile(&PackedTile {
+                first_row,
+                rows,
+                width: self.options.width,
+                layout: self.layout,
+                options: &self.options,
+                words,
+            })
+        };
+        readback.unmap();
+        result
+    }
+
+    fn tile_bytes(&self, rows: u32) -> u64 {
+        self.options.width as u64 * rows as u64 * self.layout.words() as u64 * 4
+    }
+
+    /// Dispatches one tile into `slot`, copies it to the slot's readback buffer and waits
+    /// until that is mapped; returns the kernel time where the adapter measures it.
+    fn run_tile(&self, slot: usize, first_row: u32, rows: u32) -> Result<Option<u64>, GpuError> {
+        let gpu = self.gpu;
+        let s = &self.slots[slot];
+        let params = Params { first_row, tile_rows: rows, ..self.params };
+        gpu.queue.write_buffer(&s.params, 0, bytemuck::bytes_of(&params));
+        let size = self.tile_bytes(rows);
+        let mut encoder = gpu.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("raycast") });
+        {
+            let timestamp_writes = s.timer.as_ref().map(|t| wgpu::ComputePassTimestampWrites {
+                query_set: &t.queries,
+                beginning_of_pass_write_index: Some(0),
+                end_of_pass_write_index: Some(1),
+            });
+            let mut pass =
+                encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("raycast"), timestamp_writes });
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, &s.bind_group, &[]);
+            pass.dispatch_workgroups(self.options.width.div_ceil(WORKGROUP), rows.div_ceil(WORKGROUP), 1);
+        }
+        encoder.copy_buffer_to_buffer(&s.output, 0, &s.readback, 0, size);
+        if let Some(timer) = &s.timer {
+            timer.resolve(&mut encoder);
+        }
+        let submission = gpu.queue.submit([encoder.finish()]);
+        map_and_wait(&gpu.device, &s.readback.slice(..size), submission.clone())?;
+        match &s.timer {
+            Some(timer) => Ok(Some(timer.elapsed_ns(&gpu.device, gpu.queue.get_timestamp_period())?)),
+            None => Ok(None),
+        }
+    }
+}
+
+impl Slot {
+    fn new(gpu: &GpuRenderer, inputs: &[Option<wgpu::Buffer>; BINDINGS.len()], tile_bytes: u64) -> Slot {
+        let buffer = |label, size, usage| {
+            gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size,
+                usage,
+                mapped_at_creation: false,
+            })
+        };
+        use wgpu::BufferUsages as U;
+        let params = buffer("params", std::mem::size_of::<Params>() as u64, U::STORAGE | U::COPY_DST);
+        let output = buffer("pixels", tile_bytes, U::STORAGE | U::COPY_SRC);
+        let readback = buffer("readback", tile_bytes, U::MAP_READ | U::COPY_DST);
+        let entries: Vec<_> = (0..BINDINGS.len())
+            .map(|k| {
+                let resource = match k {
+                    0 => &params,
+                    OUTPUT_BINDING => &output,
+                    _ => inputs[k].as_ref().expect("every input binding is uploaded"),
+                };
+                wgpu::BindGroupEntry { binding: k as u32, resource: resource.as_entire_binding() }
+            })
+            .collect();
+        let bind_group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("raycast"),
+            layout: &gpu.bind_group_layout,
+            entries: &entries,
+        });
+        let timer = gpu.timestamps.then(|| Timer::new(&gpu.device));
+        Slot { params, output, readback, bind_group, timer }
+    }
+}
+
+/// The scene's read-only buffers, at their `@binding` (params and the output are per slot).
+fn upload_inputs(
+    gpu: &GpuRenderer,
+    buffers: &SceneBuffers,
+) -> Result<[Option<wgpu::Buffer>; BINDINGS.len()], GpuError> {
+    let limit = gpu.limits.max_storage_buffer_binding_size;
+    let bvh = buffers.bvh.as_ref();
+    let bins = buffers.bins.as_ref();
+    let contents: [Option<&[u8]>; BINDINGS.len()] = [
+        None,
+        Some(non_empty(&buffers.spheres)),
+        Some(non_empty(&buffers.ellipsoids)),
+        Some(non_empty(&buffers.planes)),
+        Some(non_empty(&buffers.triangles)),
+        Some(non_empty(&buffers.materials)),
+        Some(non_empty(&buffers.lights)),
+        None,
+        Some(non_empty(bvh.map_or(&[][..], |b| &b.nodes))),
+        Some(non_empty(bvh.map_or(&[][..], |b| &b.prim_refs))),
+        Some(non_empty(bins.map_or(&[][..], |b| &b.eye_triangles))),
+        Some(non_empty(bins.map_or(&[][..], |b| &b.ranges))),
+        Some(non_empty(bins.map_or(&[][..], |b| &b.items))),
+    ];
+    let mut out: [Option<wgpu::Buffer>; BINDINGS.len()] = Default::default();
+    for (k, bytes) in contents.iter().enumerate() {
+        let Some(bytes) = bytes else { continue };
+        let name = BINDINGS[k].name;
+        if bytes.len() as u64 > limit {
+            return Err(GpuError::TooLarge(format!(
+                "{name}: {} bytes exceed the adapter's storage binding limit of {limit} bytes",
+                bytes.len()
+            )));
+        }
+        out[k] = Some(gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(name),
+            contents: bytes,
+            usage: wgpu::BufferUsages::STORAGE,
+        }));
+    }
+    Ok(out)
+}
+
+/// A zero-sized buffer cannot be bound, so an empty list is uploaded as one zeroed element
+/// (the kernel reads only as many as `Params` counts).
+fn non_empty<T: bytemuck::Pod>(items: &[T]) -> &[u8] {
+    const ZEROS: [u8; 64] = [0; 64];
+    if items.is_empty() {
+        &ZEROS[..std::mem::size_of::<T>()]
+    } else {
+        bytemuck::cast_slice(items)
+    }
+}
+
+/// Maps `slice` for reading once `submission` is done, blocking until it is.
+pub(super) fn map_and_wait(
+    device: &wgpu::Device,
+    slice: &wgpu::BufferSlice,
+    submission: wgpu::SubmissionIndex,
+) -> Result<(), GpuError> {
+    let (sender, receiver) = std::sync::mpsc::channel();
+    slice.map_async(wgpu::MapMode::Read, move |result| {
+        let _ = sender.send(result);
+    });
+    device
+        .poll(wgpu::PollType::Wait { submission_index: Some(submission), timeout: None })
+        .map_err(|e| GpuError::Readback(e.to_string()))?;
+    receiver.recv().map_err(|e| GpuError::Readback(e.to_string()))?.map_err(|e| GpuError::Readback(e.to_string()))
+}
+
+impl PackedTile<'_> {
+    /// The tile as float buffers (a render prepared with `packed = false`).
+    pub fn to_frame(&self) -> Frame {
+        assert!(!self.layout.packed, "a packed tile holds 8-bit images, not floats");
+        self.layout.decode(self.options, self.rows, self.words)
+    }
+
+    /// The word of output `slot` (0 = the first output asked for) of each pixel.
+    fn output_words(&self, slot: usize) -> impl Iterator<Item = u32> + '_ {
+        assert!(self.layout.packed, "a float tile holds no 8-bit images");
+        let stride = self.layout.words() as usize;
+        self.words.iter().skip(slot).step_by(stride).copied().take(self.width as usize * self.rows as usize)
+    }
+
+    /// 8-bit RGB rows of the diffuse-shaded image, quantised by the kernel.
+    pub fn color_rgb(&self) -> Vec<u8> {
+        rgb_of(self.output_words(0))
+    }
+
+    /// 8-bit RGB rows of the normal visualisation `|N|`, quantised by the kernel.
+    pub fn normals_rgb(&self) -> Vec<u8> {
+        rgb_of(self.output_words(self.layout.color as usize))
+    }
+
+    /// 8-bit RGB rows of the depth visualisation; the kernel hands over the distance `t`
+    /// and the host quantises it in f64, exactly as [`crate::image_io::depth_image`] does.
+    pub fn depth_rgb(&self, min: f32, max: f32) -> Vec<u8> {
+        let slot = self.layout.color as usize + self.layout.normal as usize;
+        let mut out = Vec::with_capacity(self.width as usize * self.rows as usize * 3);
+        for word in self.output_words(slot) {
+            let grey =
+                if word == PACKED_MISS { 0 } else { crate::image_io::depth_level(f32::from_bits(word), min, max) };
+            out.extend_from_slice(&[grey; 3]);
+        }
+        out
+    }
+}
+
+/// Bytes r, g, b of words `r | g << 8 | b << 16`.
+fn rgb_of(words: impl Iterator<Item = u32>) -> Vec<u8> {
+    let mut out = Vec::new();
+    for w in words {
+        out.extend_from_slice(&w.to_le_bytes()[..3]);
+    }
+    out
+}
