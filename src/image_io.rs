@@ -52,12 +52,33 @@ fn image_from(frame: &Frame, pixel: impl Fn(usize) -> [u8; 3]) -> RgbImage {
     RgbImage::from_raw(frame.width, frame.height, data).expect("buffer sized from the frame")
 }
 
+/// The linear colour, unclamped, three floats a pixel (`-output` as EXR).
+pub fn color_values(frame: &Frame) -> Vec<f32> {
+    frame.color.iter().flatten().copied().collect()
+}
+
+/// The signed unit world normal, three floats a pixel, zero where nothing was hit
+/// (`-normals` as EXR).
+pub fn normal_values(frame: &Frame) -> Vec<f32> {
+    (0..frame.hit.len()).flat_map(|k| if frame.hit[k] { frame.normal[k] } else { [0.0; 3] }).collect()
+}
+
+/// The signed hit distance `t` in world units, one float a pixel (`-depth` as EXR).
+/// Where nothing was hit: +∞, the distance of a surface that is not there. It sorts behind
+/// every hit (orthographic depths can be negative, so no finite value would), and keeps
+/// `min`/`<` depth tests meaningful, which NaN would not.
+pub fn depth_values(frame: &Frame) -> Vec<f32> {
+    (0..frame.hit.len()).map(|k| if frame.hit[k] { frame.depth[k] } else { f32::INFINITY }).collect()
+}
+
 /// The image file formats we write, chosen by file extension.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ImageFormat {
     /// Uncompressed 24-bit true-colour TGA (type 2), as the course writes it.
     Tga,
     Png,
+    /// OpenEXR, 32-bit float channels: the frame's values themselves (see [`ExrFile`]).
+    Exr,
 }
 
 impl ImageFormat {
@@ -67,6 +88,7 @@ impl ImageFormat {
         match ext.as_str() {
             "tga" => Some(ImageFormat::Tga),
             "png" => Some(ImageFormat::Png),
+            "exr" => Some(ImageFormat::Exr),
             _ => None,
         }
     }
@@ -111,14 +133,13 @@ impl ImageFile {
         }
         let format = ImageFormat::from_path(path)
             .ok_or_else(|| fail("unsupported image format (use a .tga or .png file name)".into()))?;
-        let dir = folder_of(path);
-        let temp = LiveTemp::create_in(dir).map_err(|e| fail(cannot_create_in(dir, &e)))?;
-        let file = temp.file().try_clone().map_err(|e| fail(e.to_string()))?;
+        let (temp, file) = temp_beside(path)?;
         let encoder = match format {
             ImageFormat::Tga => Encoder::Tga(tga_start(file, width, height).map_err(|e| fail(e.to_string()))?),
             ImageFormat::Png => {
                 Encoder::Png(Box::new(png_start(file, width, height).map_err(|e| fail(e.to_string()))?))
             }
+            ImageFormat::Exr => return Err(fail("an EXR image holds floats: write it with ExrFile".into())),
         };
         Ok(ImageFile { path: path.to_path_buf(), temp, encoder, width, height, rows_written: 0 })
     }
@@ -149,8 +170,7 @@ impl ImageFile {
         };
         let fail = |message: String| ImageError { path: self.path.clone(), message };
         result.map_err(|e| fail(e.to_string()))?;
-        make_readable(self.temp.file()).map_err(|e| fail(e.to_string()))?;
-        Ok(FinishedImage { path: self.path, temp: self.temp })
+        FinishedImage::new(self.path, self.temp)
     }
 
     fn error(&self, message: String) -> ImageError {
@@ -158,10 +178,184 @@ impl ImageFile {
     }
 }
 
-/// A complete image in its temporary file.
+/// The channels of an EXR file (32-bit float each).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ExrChannels {
+    /// `R`, `G`, `B`: a colour, or a normal's x, y, z (so any viewer shows it).
+    Rgb,
+    /// `Z`, OpenEXR's standard name for depth.
+    Depth,
+}
+
+impl ExrChannels {
+    /// Floats per pixel.
+    pub fn count(self) -> usize {
+        match self {
+            ExrChannels::Rgb => 3,
+            ExrChannels::Depth => 1,
+        }
+    }
+}
+
+/// ZIP over blocks of 16 rows: lossless, and at most 16 rows wait in memory for their block.
+const EXR_COMPRESSION: exr::compression::Compression = exr::compression::Compression::ZIP16;
+
+/// An OpenEXR file of 32-bit floats written row by row, top row first, into a temporary file
+/// like [`ImageFile`]. The `exr` crate writes blocks only from inside a closure, so the
+/// encoder runs on its own thread, fed through a channel of at most two row batches: memory
+/// stays bounded by what one call passes in plus one 16-row block.
+pub struct ExrFile {
+    path: PathBuf,
+    temp: LiveTemp,
+    rows: Option<std::sync::mpsc::SyncSender<Vec<f32>>>,
+    encoder: Option<std::thread::JoinHandle<exr::error::UnitResult>>,
+    width: u32,
+    height: u32,
+    channels: ExrChannels,
+    rows_written: u32,
+}
+
+impl ExrFile {
+    /// Starts `path` for a `width × height` image with `channels`.
+    pub fn create(path: &Path, width: u32, height: u32, channels: ExrChannels) -> Result<ExrFile, ImageError> {
+        use exr::meta::attribute::{ChannelDescription, LineOrder, SampleType};
+        use exr::meta::header::{Header, LayerAttributes};
+        let (temp, file) = temp_beside(path)?;
+        // EXR lists channels in alphabetical order; blocks store them in that order.
+        let names: &[&str] = match channels {
+            ExrChannels::Rgb => &["B", "G", "R"],
+            ExrChannels::Depth => &["Z"],
+        };
+        let list = names.iter().map(|n| ChannelDescription::new(*n, SampleType::F32, true)).collect();
+        let size = (width as usize, height as usize);
+        let header = Header::new("".into(), size, list).with_attributes(LayerAttributes::default()).with_encoding(
+            EXR_COMPRESSION,
+            exr::meta::BlockDescription::ScanLines,
+            LineOrder::Increasing,
+        );
+        let (sender, receiver) = std::sync::mpsc::sync_channel::<Vec<f32>>(2);
+        let encoder = std::thread::Builder::new()
+            .name("exr-writer".into())
+            .spawn(move || {
+                let out = BufWriter::new(file);
+                exr::block::write(out, std::iter::once(header).collect(), true, |meta, chunks| {
+                    use exr::block::writer::ChunksWriter;
+                    let mut compressor = chunks.sequential_blocks_compressor(&meta);
+                    encode_exr_blocks(&meta.headers[0], size, channels, receiver, |index, block| {
+                        compressor.compress_block(index, block)
+                    })
+                })
+            })
+            .map_err(|e| ImageError { path: path.to_path_buf(), message: e.to_string() })?;
+        Ok(ExrFile {
+            path: path.to_path_buf(),
+            temp,
+            rows: Some(sender),
+            encoder: Some(encoder),
+            width,
+            height,
+            channels,
+            rows_written: 0,
+        })
+    }
+
+    /// Appends whole rows of pixels, `channels.count()` floats each, continuing from the last
+    /// row written.
+    pub fn write_rows(&mut self, values: &[f32]) -> Result<(), ImageError> {
+        let row_len = self.width as usize * self.channels.count();
+        assert_eq!(values.len() % row_len, 0, "whole rows only");
+        let rows = (values.len() / row_len) as u32;
+        assert!(self.rows_written + rows <= self.height, "more rows than the image has");
+        let sent = self.rows.as_ref().is_some_and(|r| r.send(values.to_vec()).is_ok());
+        if !sent {
+            // The encoder stopped early: its error says why.
+            return Err(self.join_encoder().err().unwrap_or_else(|| self.error("the EXR encoder stopped".into())));
+        }
+        self.rows_written += rows;
+        Ok(())
+    }
+
+    /// Completes the file; it is still temporary until [`persist_all`].
+    pub fn finish(mut self) -> Result<FinishedImage, ImageError> {
+        if self.rows_written != self.height {
+            return Err(self.error(format!("only {} of {} rows were written", self.rows_written, self.height)));
+        }
+        self.join_encoder()?;
+        FinishedImage::new(self.path, self.temp)
+    }
+
+    /// Closes the channel and waits for the encoder to write the offset table.
+    fn join_encoder(&mut self) -> Result<(), ImageError> {
+        self.rows = None;
+        match self.encoder.take().map(|e| e.join()) {
+            Some(Ok(Ok(()))) | None => Ok(()),
+            Some(Ok(Err(e))) => Err(self.error(e.to_string())),
+            Some(Err(_)) => Err(self.error("the EXR encoder panicked".into())),
+        }
+    }
+
+    fn error(&self, message: String) -> ImageError {
+        ImageError { path: self.path.clone(), message }
+    }
+}
+
+/// Receives rows of interleaved pixels and hands each complete block, channels planar per
+/// row as EXR stores them, to `compress` with its index.
+fn encode_exr_blocks(
+    header: &exr::meta::header::Header,
+    (width, height): (usize, usize),
+    channels: ExrChannels,
+    rows: std::sync::mpsc::Receiver<Vec<f32>>,
+    mut compress: impl FnMut(usize, exr::block::UncompressedBlock) -> exr::error::UnitResult,
+) -> exr::error::UnitResult {
+    let lines_per_block = header.compression.scan_lines_per_block();
+    let n = channels.count();
+    let row_len = width * n;
+    let mut pending: Vec<f32> = Vec::new();
+    let mut next_row = 0;
+    for batch in rows {
+        pending.extend_from_slice(&batch);
+        loop {
+            let lines = lines_per_block.min(height - next_row);
+            if lines == 0 || pending.len() < lines * row_len {
+                break;
+            }
+            let mut data = Vec::with_capacity(lines * row_len * 4);
+            for row in pending[..lines * row_len].chunks_exact(row_len) {
+                // Alphabetical channel order: B, G, R is the interleaved pixel read backwards.
+                for c in (0..n).rev() {
+                    for pixel in row.chunks_exact(n) {
+                        data.extend_from_slice(&pixel[c].to_ne_bytes());
+                    }
+                }
+            }
+            let index = exr::block::BlockIndex {
+                layer: 0,
+                pixel_position: exr::math::Vec2(0, next_row),
+                pixel_size: exr::math::Vec2(width, lines),
+                level: exr::math::Vec2(0, 0),
+            };
+            compress(next_row / lines_per_block, exr::block::UncompressedBlock { index, data })?;
+            pending.drain(..lines * row_len);
+            next_row += lines;
+        }
+    }
+    Ok(())
+}
+
+/// A complete image (or part file) in its temporary file.
 pub struct FinishedImage {
     path: PathBuf,
     temp: LiveTemp,
+}
+
+impl FinishedImage {
+    /// The complete contents of `path`, written to `temp`: made readable (temporary files are
+    /// private) and ready for [`persist_all`].
+    pub fn new(path: PathBuf, temp: LiveTemp) -> Result<FinishedImage, ImageError> {
+        make_readable(temp.file()).map_err(|e| ImageError { path: path.clone(), message: e.to_string() })?;
+        Ok(FinishedImage { path, temp })
+    }
 }
 
 /// Renames every finished image into place. Called only once all are complete, so a failed
@@ -197,7 +391,7 @@ pub fn remove_temporary_files_for_exit() -> usize {
 
 /// A temporary file beside an image's destination, on the list of live ones from its
 /// creation until it is renamed into place or dropped (which deletes it).
-struct LiveTemp(Option<tempfile::NamedTempFile>);
+pub struct LiveTemp(Option<tempfile::NamedTempFile>);
 
 impl LiveTemp {
     fn create_in(dir: &Path) -> std::io::Result<LiveTemp> {
@@ -270,6 +464,16 @@ pub fn write_images(images: &[(PathBuf, RgbImage)]) -> Result<(), ImageError> {
 /// Writes one image atomically (see [`write_images`]).
 pub fn write_image(path: &Path, image: &RgbImage) -> Result<(), ImageError> {
     write_images(&[(path.to_path_buf(), image.clone())])
+}
+
+/// A private temporary file in `path`'s folder (so the final rename stays on one file
+/// system), and a second handle to it for writing. Errors name `path`.
+pub fn temp_beside(path: &Path) -> Result<(LiveTemp, std::fs::File), ImageError> {
+    let fail = |message: String| ImageError { path: path.to_path_buf(), message };
+    let dir = folder_of(path);
+    let temp = LiveTemp::create_in(dir).map_err(|e| fail(cannot_create_in(dir, &e)))?;
+    let file = temp.file().try_clone().map_err(|e| fail(e.to_string()))?;
+    Ok((temp, file))
 }
 
 /// TGA type 2 (uncompressed true colour), 24 bits, origin bottom-left as the course writes it.

@@ -3,8 +3,9 @@
 mod app;
 
 use app::backend::Backend;
-use app::cli::{self, BackendChoice, Command, Outputs, RenderArgs};
+use app::cli::{self, BackendChoice, Command, Habits, Outputs, RenderArgs, Verbosity};
 use app::exit::{self, note, say, Failure};
+use app::job::LineReport;
 use raycaster::scene::SceneWarning;
 use std::process::ExitCode;
 
@@ -21,25 +22,40 @@ fn main() -> ExitCode {
 
 fn run() -> Result<(), Failure> {
     app::signals::clean_up_on_interrupt().map_err(|e| Failure::Failed(format!("cannot handle signals: {e}")))?;
-    match cli::parse_args(std::env::args_os().skip(1))? {
+    let line = cli::parse_command_line(std::env::args_os().skip(1))?;
+    let habits = line.habits;
+    if let Some(threads) = habits.threads {
+        // Before anything uses rayon: the reference's rows run on the global pool.
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build_global()
+            .map_err(|e| Failure::Failed(format!("--threads {threads}: {e}")))?;
+    }
+    match line.command {
         Command::Help => exit::print(&format!("{}\n", cli::USAGE)),
-        Command::Render(args) => render(&args),
-        Command::Compare { args, outputs, max_diff_pixels } => compare(&args, outputs, max_diff_pixels),
-        Command::Batch { file, backend } => batch(&file, backend),
-        Command::Bench(bench_args) => bench(&bench_args),
+        Command::Version => exit::print(&format!("raycaster {}\n", env!("CARGO_PKG_VERSION"))),
+        Command::Render(args) => render(&args, habits),
+        Command::Compare { args, outputs, max_diff_pixels } => compare(&args, outputs, max_diff_pixels, habits),
+        Command::Batch { file, backend, shard } => batch(&file, backend, shard, habits),
+        Command::Stitch(stitch_args) => stitch(&stitch_args, habits),
+        Command::Bench(bench_args) => bench(&bench_args, habits),
     }
 }
 
-fn render(args: &RenderArgs) -> Result<(), Failure> {
-    let backend = open_backend(args.backend)?;
-    warn(&app::job::run(args, &backend)?);
+fn render(args: &RenderArgs, habits: Habits) -> Result<(), Failure> {
+    let backend = open_backend(args.backend, habits)?;
+    let report = app::job::run(args, &backend, habits.verbosity != Verbosity::Quiet)?;
+    warn(&report.warnings, habits);
+    if habits.verbosity == Verbosity::Verbose {
+        notice(&report.verbose_lines(&backend, args));
+    }
     Ok(())
 }
 
-fn compare(args: &RenderArgs, outputs: Outputs, max_diff_pixels: Option<u64>) -> Result<(), Failure> {
+fn compare(args: &RenderArgs, outputs: Outputs, max_diff_pixels: Option<u64>, habits: Habits) -> Result<(), Failure> {
     let gpu = open_gpu()?;
     let comparison = app::job::compare(args, outputs, &gpu)?;
-    warn(&comparison.warnings);
+    warn(&comparison.warnings, habits);
     exit::print(&format!(
         "gpu ({}) against the f64 reference ({} triangles, {} spheres):\n{}",
         gpu.adapter_info().name,
@@ -50,11 +66,37 @@ fn compare(args: &RenderArgs, outputs: Outputs, max_diff_pixels: Option<u64>) ->
     comparison.verdict(max_diff_pixels).map_err(Failure::Failed)
 }
 
-fn batch(file: &std::path::Path, choice: BackendChoice) -> Result<(), Failure> {
+fn batch(
+    file: &std::path::Path,
+    choice: BackendChoice,
+    shard: Option<app::split::Split>,
+    habits: Habits,
+) -> Result<(), Failure> {
     let text = std::fs::read_to_string(file).map_err(|e| Failure::Failed(format!("{}: {e}", file.display())))?;
-    let backend = open_backend(choice)?;
+    let backend = open_backend(choice, habits)?;
+    let located = |line: usize, report: &LineReport| format!("{}:{line}: {report}", file.display());
+    // `--verbose`'s time of each line, printed after the batch.
+    let mut timings = Vec::new();
     let count =
-        app::job::run_batch(&text, &backend, |line, report| say(&format!("{}:{line}: {report}", file.display())));
+        app::job::run_batch(
+            &text,
+            &backend,
+            shard,
+            habits.verbosity != Verbosity::Quiet,
+            |line, report| match report {
+                LineReport::Warning(_) if habits.verbosity == Verbosity::Quiet => {}
+                LineReport::Rendered { .. } if habits.verbosity == Verbosity::Verbose => {
+                    timings.push(located(line, &report))
+                }
+                LineReport::Rendered { .. } => {}
+                _ => say(&located(line, &report)),
+            },
+        );
+    if habits.verbosity == Verbosity::Verbose {
+        notice(&[format!("backend: {}", backend.describe())]);
+        notice(&timings);
+        notice(&[format!("memory: peak resident {:.0} MiB", app::bench::peak_memory_mib())]);
+    }
     if count.failed > 0 {
         return Err(Failure::Failed(format!(
             "{}: {} of {} command lines failed",
@@ -66,7 +108,23 @@ fn batch(file: &std::path::Path, choice: BackendChoice) -> Result<(), Failure> {
     Ok(())
 }
 
-fn bench(args: &cli::BenchArgs) -> Result<(), Failure> {
+/// `raycaster stitch`: every problem found is one line of its own; the last is the failure
+/// `main` reports.
+fn stitch(args: &cli::StitchArgs, habits: Habits) -> Result<(), Failure> {
+    let stitched = app::split::stitch(args).map_err(|app::split::Refusal(mut problems)| {
+        let last = problems.pop().unwrap_or_default();
+        for p in problems {
+            say(&format!("stitch: {p}"));
+        }
+        Failure::Failed(format!("stitch: {last}"))
+    })?;
+    if habits.verbosity == Verbosity::Verbose {
+        notice(&[format!("stitch: {stitched} parts")]);
+    }
+    Ok(())
+}
+
+fn bench(args: &cli::BenchArgs, habits: Habits) -> Result<(), Failure> {
     use app::bench;
     let gpu = open_gpu()?;
     let failed = |e: &dyn std::fmt::Display| Failure::Failed(format!("bench: {e}"));
@@ -75,9 +133,12 @@ fn bench(args: &cli::BenchArgs) -> Result<(), Failure> {
         .into_iter()
         .filter(|c| args.only.as_ref().is_none_or(|o| c.name.contains(o.as_str())))
         .collect::<Vec<_>>();
+    let quiet = habits.verbosity == Verbosity::Quiet;
     let mut rows = Vec::new();
     for case in &cases {
-        note(&format!("bench: {} {}×{} ({})", case.name, case.width, case.height, case.triangle_test.name()));
+        if !quiet {
+            note(&format!("bench: {} {}×{} ({})", case.name, case.width, case.height, case.triangle_test.name()));
+        }
         rows.push(bench::run_case(&gpu, case, args.runs).map_err(|e| failed(&format!("{}: {e}", case.name)))?);
     }
     exit::print(&bench::markdown(&rows, &gpu.adapter_info().name))?;
@@ -86,11 +147,13 @@ fn bench(args: &cli::BenchArgs) -> Result<(), Failure> {
         .and_then(|()| std::fs::write(args.out.join("bench.csv"), bench::csv(&rows)).map_err(|e| e.to_string()))
         .and_then(|()| write_plot(&rows, &args.out))
         .map_err(|e| failed(&e))?;
-    note(&format!(
-        "bench: wrote {}/bench.csv{}",
-        args.out.display(),
-        if cfg!(feature = "plot") { " and bench.png" } else { "" }
-    ));
+    if !quiet {
+        note(&format!(
+            "bench: wrote {}/bench.csv{}",
+            args.out.display(),
+            if cfg!(feature = "plot") { " and bench.png" } else { "" }
+        ));
+    }
     Ok(())
 }
 
@@ -105,10 +168,10 @@ fn write_plot(_: &[app::bench::Row], _: &std::path::Path) -> Result<(), String> 
     Ok(())
 }
 
-fn open_backend(choice: BackendChoice) -> Result<Backend, Failure> {
-    let (backend, notice) = Backend::open(choice)?;
-    if let Some(notice) = notice {
-        say(&notice);
+fn open_backend(choice: BackendChoice, habits: Habits) -> Result<Backend, Failure> {
+    let (backend, fallback) = Backend::open(choice)?;
+    if let Some(fallback) = fallback.filter(|_| habits.verbosity != Verbosity::Quiet) {
+        say(&fallback);
     }
     Ok(backend)
 }
@@ -117,9 +180,20 @@ fn open_gpu() -> Result<raycaster::gpu::GpuRenderer, Failure> {
     Ok(raycaster::gpu::GpuRenderer::new()?)
 }
 
-fn warn(warnings: &[SceneWarning]) {
+/// The scene's warnings (located, `FILE:LINE:COL: warning: ...`), unless `-q`.
+fn warn(warnings: &[SceneWarning], habits: Habits) {
+    if habits.verbosity == Verbosity::Quiet {
+        return;
+    }
     for w in warnings {
         say(&w.to_string());
+    }
+}
+
+/// `--verbose`'s lines, on stderr so that stdout stays the command's output.
+fn notice(lines: &[String]) {
+    for line in lines {
+        say(line);
     }
 }
 /// Mesa's Vulkan drivers print "XDG_RUNTIME_DIR is invalid or not set" on every start when

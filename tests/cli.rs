@@ -80,9 +80,12 @@ fn png_by_extension() {
 fn mesh_paths_resolve_from_the_scene_folder() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("o.tga");
-    let scene = common::corpus().join("a2/scene2_10_bunny_1k.txt");
-    let result =
-        raycaster(&["-input", path_str(&scene), "-size", "20", "20", "-output", path_str(&out), "--backend", "cpu"]);
+    let scene = common::scenes_dir().join("mesh_octahedron.txt");
+    let result = Command::new(env!("CARGO_BIN_EXE_raycaster"))
+        .args(["-input", path_str(&scene), "-size", "20", "20", "-output", "o.tga", "--backend", "cpu"])
+        .current_dir(dir.path())
+        .output()
+        .unwrap();
     assert!(result.status.success(), "{}", stderr(&result));
     assert!(out.exists());
 }
@@ -254,11 +257,11 @@ fn batch_runs_every_line_and_reports_failures() {
 /// rows carry both a speed and an error (so the bench cannot rot unnoticed).
 #[test]
 fn bench_quick_writes_table_csv_and_plot() {
+    let Some(corpus) = common::corpus() else { return };
     if common::gpu().is_none() {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
-    let corpus = common::corpus();
     let result =
         raycaster(&["bench", "--quick", "--runs", "1", "--out", path_str(dir.path()), "--corpus", path_str(&corpus)]);
     assert!(result.status.success(), "{}", stderr(&result));
@@ -508,5 +511,161 @@ fn wait_for_temporary_files(child: &std::process::Child, dir: &Path, count: usiz
         }
         assert!(start.elapsed().as_secs() < 60, "no temporary files after a minute (child {})", child.id());
         std::thread::sleep(std::time::Duration::from_millis(10));
+    }
+}
+
+/// About 9 million pixels of the octahedron on one CPU thread: a few seconds here, well past
+/// the second after which a progress bar may appear.
+fn long_render(out: &Path) -> Vec<String> {
+    ["--threads", "1", "--backend", "cpu", "-input", "scenes/mesh_octahedron.txt", "-size", "3000", "3000", "-output"]
+        .iter()
+        .map(|s| s.to_string())
+        .chain([path_str(out).to_string()])
+        .collect()
+}
+
+/// Scripts and the course's command lines stay quiet: with stderr a pipe, even a render that
+/// lasts seconds prints nothing there.
+#[test]
+fn a_long_render_through_a_pipe_prints_nothing_on_stderr() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("o.tga");
+    let args = long_render(&out);
+    let result = raycaster(&args.iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(result.status.success(), "{}", stderr(&result));
+    assert_eq!(stderr(&result), "");
+    assert!(out.exists());
+}
+
+/// On a terminal (a pseudo-terminal from util-linux's `script`), the same render shows a bar
+/// with rows done, the rate and the time left; `-q` shows none.
+#[cfg(target_os = "linux")]
+#[test]
+fn a_long_render_on_a_terminal_shows_progress_unless_quiet() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("o.tga");
+    let on_terminal = |extra: &str| {
+        let command = format!("'{}' {extra} {}", env!("CARGO_BIN_EXE_raycaster"), long_render(&out).join(" "));
+        // script copies what the command writes to its terminal onto its own stdout.
+        let result = Command::new("script")
+            .args(["-qec", &command, "/dev/null"])
+            .current_dir(env!("CARGO_MANIFEST_DIR"))
+            .output()
+            .expect("util-linux's script runs");
+        assert!(result.status.success(), "{}", stderr(&result));
+        String::from_utf8_lossy(&result.stdout).into_owned()
+    };
+    let shown = on_terminal("");
+    assert!(shown.contains("/3000 rows, ") && shown.contains("/s, ") && shown.contains(" left"), "{shown:?}");
+    let quiet = on_terminal("-q");
+    assert_eq!(quiet, "", "-q printed on the terminal");
+}
+
+/// `-q` silences warnings and notices; errors still show.
+#[test]
+fn quiet_silences_warnings_but_not_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("o.tga");
+    let base = ["-input", "scenes/no_lights.txt", "-size", "8", "8", "-output", path_str(&out), "--backend", "cpu"];
+    let loud = raycaster(&base);
+    assert!(loud.status.success() && stderr(&loud).contains("warning: no lights"), "{}", stderr(&loud));
+    let quiet = raycaster(&[&base[..], &["-q"]].concat());
+    assert!(quiet.status.success());
+    assert_eq!(stderr(&quiet), "");
+    let failed = raycaster(&["--quiet", "-input", "scenes/missing.txt", "-size", "8", "8", "-output", path_str(&out)]);
+    assert_eq!(failed.status.code(), Some(1));
+    assert!(stderr(&failed).contains("missing.txt"), "{}", stderr(&failed));
+    // batch too.
+    let commands = dir.path().join("commands.txt");
+    std::fs::write(&commands, base.join(" ")).unwrap();
+    let batch = raycaster(&["batch", path_str(&commands), "--backend", "cpu", "-q"]);
+    assert!(batch.status.success(), "{}", stderr(&batch));
+    assert_eq!(stderr(&batch), "");
+}
+
+/// The octahedrons (16 triangles: enough for a hierarchy) at 40×30 into `out`, with `flags`.
+fn octahedron_40x30(out: &Path, flags: &[&str]) -> Output {
+    let args = ["-input", "scenes/mesh_octahedron.txt", "-size", "40", "30", "-output", path_str(out)];
+    raycaster(&[flags, &args[..]].concat())
+}
+
+/// `-v` on the CPU: the backend with its threads (as `--threads` set them), and where the time
+/// and memory went; the image does not depend on the number of threads.
+#[test]
+fn verbose_and_threads_on_the_cpu() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut images = Vec::new();
+    for threads in ["1", "3"] {
+        let out = dir.path().join(format!("o{threads}.tga"));
+        let result = octahedron_40x30(&out, &["-v", "--threads", threads, "--backend=cpu"]);
+        let message = stderr(&result);
+        assert!(result.status.success(), "{message}");
+        let plural = if threads == "1" { "thread" } else { "threads" };
+        assert!(message.contains(&format!("backend: cpu, the f64 reference on {threads} {plural}")), "{message}");
+        for needle in ["time: parsing ", " ms, rendering ", " ms in 1 tile, writing ", "memory: peak resident "] {
+            assert!(message.contains(needle), "{needle}: {message}");
+        }
+        images.push(std::fs::read(&out).unwrap());
+    }
+    assert_eq!(images[0], images[1]);
+    let bad = raycaster(&["--threads", "0", "-input", "scenes/triangles.txt", "-size", "8", "8", "-output", "o.tga"]);
+    assert_eq!(bad.status.code(), Some(2));
+    assert!(stderr(&bad).contains("--threads: '0'"), "{}", stderr(&bad));
+}
+
+/// `-v` on the GPU: the adapter, the kernel variant, and the kernel's and the hierarchy's time.
+#[test]
+fn verbose_on_the_gpu_names_adapter_and_kernel() {
+    let Some(gpu) = common::gpu() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("o.png");
+    let result = octahedron_40x30(&out, &["--verbose", "--backend", "gpu", "--triangle-test", "moller"]);
+    let message = stderr(&result);
+    assert!(result.status.success(), "{message}");
+    assert!(message.contains(&format!("backend: gpu, {}", gpu.adapter_info().name)), "{message}");
+    assert!(message.contains("kernel: moller triangle test, robust sphere test"), "{message}");
+    let needles =
+        ["time: parsing ", " (preparing ", "; hierarchy ", ", writing ", "memory: peak resident ", "on the GPU"];
+    for needle in needles {
+        assert!(message.contains(needle), "{needle}: {message}");
+    }
+}
+
+#[test]
+fn version_in_both_spellings() {
+    for flag in ["--version", "-V"] {
+        let result = raycaster(&[flag]);
+        assert!(result.status.success());
+        assert_eq!(String::from_utf8_lossy(&result.stdout), format!("raycaster {}\n", env!("CARGO_PKG_VERSION")));
+    }
+}
+
+/// `--flag=value` for flags with one value; a mistyped flag gets the nearest one suggested.
+#[test]
+fn flag_equals_value_and_did_you_mean() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("o.tga");
+    let ok = raycaster(&[
+        "--input=scenes/spheres_ortho.txt",
+        "-size",
+        "8",
+        "8",
+        &format!("--output={}", path_str(&out)),
+        "--backend=cpu",
+    ]);
+    assert!(ok.status.success(), "{}", stderr(&ok));
+    assert!(out.exists());
+    let cases: [(&[&str], &str); 4] = [
+        (&["-input", "scenes/spheres_ortho.txt", "-size", "8", "8", "-outptu", "o.tga"], "did you mean '-output'?"),
+        (&["-input", "scenes/spheres_ortho.txt", "--size=8", "8", "-output", "o.tga"], "--size= is not supported"),
+        (&["-input", "scenes/spheres_ortho.txt", "-size", "8", "8", "-output", "o.tga", "--shade-back=1"], "no value"),
+        (&["batch", "c.txt", "--backedn", "cpu"], "did you mean '--backend'?"),
+    ];
+    for (args, needle) in cases {
+        let result = raycaster(args);
+        let message = stderr(&result);
+        assert_eq!(result.status.code(), Some(2), "{args:?}: {message}");
+        assert_eq!(message.trim_end().lines().count(), 1, "{args:?}: {message}");
+        assert!(message.contains(needle), "{args:?}: {message}");
     }
 }

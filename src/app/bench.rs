@@ -225,7 +225,8 @@ fn reset_peak_memory() {
     let _ = std::fs::write("/proc/self/clear_refs", "5");
 }
 
-fn peak_memory_mib() -> f64 {
+/// The peak resident memory of the process so far (Linux; 0 elsewhere).
+pub fn peak_memory_mib() -> f64 {
     let status = std::fs::read_to_string("/proc/self/status").unwrap_or_default();
     status
         .lines()
@@ -264,6 +265,10 @@ pub fn mesh_scene(name: &str, mesh: Mesh) -> Scene {
 pub fn standard_cases(corpus: &Path, quick: bool) -> Result<Vec<Case>, scene::SceneError> {
     let course = corpus.join("a2");
     let meshes = corpus.join("meshes");
+    if !course.is_dir() {
+        let hint = "no course files here (give --corpus DIR or set RAYCASTER_CORPUS)";
+        return Err(scene::SceneError::in_file(&course, hint));
+    }
     let case = |name: &str, scene: Scene, size: u32| Case {
         name: name.to_string(),
         scene,

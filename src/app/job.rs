@@ -2,12 +2,16 @@
 
 use crate::app::backend::Backend;
 use crate::app::cli::{Outputs, RenderArgs};
-use raycaster::gpu::GpuError;
-use raycaster::image_io::{self, ImageError, ImageFile};
+use crate::app::output::{self, Output, Pixels, Sink};
+use crate::app::progress::Progress;
+use crate::app::split::{self, Split};
+use raycaster::gpu::{GpuError, RenderStats};
+use raycaster::image_io::{self, ImageError, ImageFormat};
 use raycaster::metrics::OutputErrors;
 use raycaster::render::RenderOptions;
 use raycaster::scene::{self, Scene, SceneError, SceneWarning};
 use std::fmt;
+use std::time::Instant;
 
 /// Anything that can stop a render.
 #[derive(Debug, thiserror::Error)]
@@ -18,6 +22,9 @@ pub enum Error {
     Gpu(#[from] GpuError),
     #[error(transparent)]
     Image(#[from] ImageError),
+    /// Identifying a split render's parts (reading the scene's text again).
+    #[error("{0}")]
+    Split(String),
 }
 
 /// The render options a command line implies: only the outputs it names are computed.
@@ -34,34 +41,119 @@ pub fn options_for(args: &RenderArgs) -> RenderOptions {
     }
 }
 
+/// What a render did, and where its time went (for `--verbose`).
+#[derive(Clone, Debug)]
+pub struct Report {
+    pub warnings: Vec<SceneWarning>,
+    pub stats: RenderStats,
+    pub parse_ms: f64,
+    /// The backend's time, from the first tile's preparation to the last tile's read-back,
+    /// less the time spent writing.
+    pub render_ms: f64,
+    /// Converting tiles to 8-bit rows, encoding and writing them, and renaming the files.
+    pub write_ms: f64,
+}
+
+impl Report {
+    /// The lines `--verbose` prints after a render with `backend`.
+    pub fn verbose_lines(&self, backend: &Backend, args: &RenderArgs) -> Vec<String> {
+        let stats = &self.stats;
+        let mut lines = vec![format!("backend: {}", backend.describe())];
+        let tiles = if stats.tiles == 1 { "1 tile".to_string() } else { format!("{} tiles", stats.tiles) };
+        let mut time = format!("time: parsing {:.1} ms, rendering {:.1} ms in {tiles}", self.parse_ms, self.render_ms);
+        if let Backend::Gpu(_) = backend {
+            lines.push(format!(
+                "kernel: {} triangle test, {} sphere test",
+                args.triangle_test.name(),
+                args.sphere_test.name()
+            ));
+            // The parts of the GPU's rendering time that it measures on its own.
+            time += &format!(" (preparing {:.1} ms: buffers, pipeline, upload", stats.prepare_ms);
+            if let Some(bvh) = stats.bvh_build_ms {
+                time += &format!("; hierarchy {bvh:.1} ms of it");
+            }
+            if let Some(ns) = stats.kernel_ns {
+                time += &format!("; kernel {:.1} ms", ns as f64 / 1e6);
+            }
+            time += ")";
+        }
+        time += &format!(", writing {:.1} ms", self.write_ms);
+        lines.push(time);
+        let mut memory = format!("memory: peak resident {:.0} MiB", crate::app::bench::peak_memory_mib());
+        if let Backend::Gpu(_) = backend {
+            memory += &format!(", scene data on the GPU {:.1} KiB", stats.scene_bytes as f64 / 1024.0);
+        }
+        lines.push(memory);
+        lines
+    }
+}
+
 /// Loads `args.input`, renders it with `backend` and writes every requested image (all of
-/// them or, on failure, none). Returns the scene's warnings.
-pub fn run(args: &RenderArgs, backend: &Backend) -> Result<Vec<SceneWarning>, Error> {
+/// them or, on failure, none). With `progress`, a bar over the rows appears on a terminal
+/// when the render takes long.
+pub fn run(args: &RenderArgs, backend: &Backend, progress: bool) -> Result<Report, Error> {
+    let start = Instant::now();
     let scene = scene::load_scene(&args.input)?;
-    render_scene(&scene, args, backend)?;
-    Ok(scene.warnings)
+    let parse_ms = start.elapsed().as_secs_f64() * 1e3;
+    let (stats, render_ms, write_ms) = render_scene(&scene, args, backend, progress)?;
+    Ok(Report { warnings: scene.warnings, stats, parse_ms, render_ms, write_ms })
 }
 
 /// Renders an already-loaded scene as `args` asks and writes the images, tile by tile, so
-/// memory stays bounded by the tile whatever the image size.
-pub fn render_scene(scene: &Scene, args: &RenderArgs, backend: &Backend) -> Result<(), Error> {
+/// memory stays bounded by the tile whatever the image size. With `--tile K/N` only band K
+/// is rendered, into part files. Returns the backend's statistics, and the milliseconds
+/// spent rendering and writing.
+pub fn render_scene(
+    scene: &Scene,
+    args: &RenderArgs,
+    backend: &Backend,
+    progress: bool,
+) -> Result<(RenderStats, f64, f64), Error> {
+    let start = Instant::now();
+    let mut writing = std::time::Duration::ZERO;
     let options = options_for(args);
-    let mut color = args.output.as_ref().map(|p| ImageFile::create(p, args.width, args.height)).transpose()?;
-    let mut normals = args.normals.as_ref().map(|p| ImageFile::create(p, args.width, args.height)).transpose()?;
-    let mut depth = args.depth.as_ref().map(|d| ImageFile::create(&d.path, args.width, args.height)).transpose()?;
-    let depth_range = args.depth.as_ref().map_or((0.0, 1.0), |d| (d.min, d.max));
-    backend.render_images(scene, &options, depth_range, |_first_row, rows| {
-        for (file, rows) in [(&mut color, rows.color), (&mut normals, rows.normals), (&mut depth, rows.depth)] {
-            if let (Some(file), Some(rows)) = (file.as_mut(), rows) {
-                file.write_rows(&rows)?;
-            }
+    let outputs = output::outputs(&args.output, &args.normals, &args.depth);
+    let band = args.tile.map_or((0, args.height), |t| t.band(args.height));
+    let mut sinks = match args.tile {
+        None => outputs.iter().map(|o| Sink::image(o, args.width, args.height)).collect::<Result<Vec<_>, _>>()?,
+        Some(tile) => split::part_headers(scene, args, backend, tile, &outputs)
+            .map_err(Error::Split)?
+            .into_iter()
+            .zip(&outputs)
+            .map(|(header, o)| Sink::part(header, o))
+            .collect::<Result<Vec<_>, _>>()?,
+    };
+    let bar = Progress::new(progress, u64::from(band.1), "rows");
+    // One tile's rows into every sink, `pixels` giving each output's; counted as writing.
+    let mut write = |rows: u32, pixels: &mut dyn FnMut(&Output) -> Pixels| {
+        let written = Instant::now();
+        for (sink, o) in sinks.iter_mut().zip(&outputs) {
+            sink.write(&pixels(o))?;
         }
+        writing += written.elapsed();
+        bar.advance(u64::from(rows));
         Ok::<(), Error>(())
-    })?;
-    let finished =
-        [color, normals, depth].into_iter().flatten().map(ImageFile::finish).collect::<Result<Vec<_>, _>>()?;
+    };
+    let stats = if outputs.iter().any(|o| o.format == ImageFormat::Exr) {
+        // Floats leave the backend as they are, for the EXR files.
+        backend.render_band(scene, &options, band.0, band.1, |_first_row, tile| {
+            write(tile.height, &mut |o| o.pixels(&tile))
+        })?
+    } else {
+        // 8-bit images only: on the GPU the kernel quantises (a fraction of the bytes to
+        // read back, and no float decoding).
+        let depth_range = args.depth.as_ref().map_or((0.0, 1.0), |d| (d.min, d.max));
+        backend.render_images(scene, &options, depth_range, band, |_first_row, mut images| {
+            write(images.rows, &mut |o| Pixels::Rgb8(images.take(o.kind)))
+        })?
+    };
+    drop(bar);
+    let render_ms = (start.elapsed() - writing).as_secs_f64() * 1e3;
+    let finishing = Instant::now();
+    let finished = sinks.into_iter().map(Sink::finish).collect::<Result<Vec<_>, _>>()?;
     image_io::persist_all(finished)?;
-    Ok(())
+    let write_ms = (writing + finishing.elapsed()).as_secs_f64() * 1e3;
+    Ok((stats, render_ms, write_ms))
 }
 
 /// What `raycaster compare` found: the GPU against the reference, per output.
@@ -130,6 +222,11 @@ pub fn compare(args: &RenderArgs, outputs: Outputs, gpu: &raycaster::gpu::GpuRen
 pub enum LineReport {
     Warning(SceneWarning),
     Failure(String),
+    /// The line rendered, in this many milliseconds (parsing, rendering, writing; for
+    /// `--verbose`).
+    Rendered {
+        ms: f64,
+    },
 }
 
 impl fmt::Display for LineReport {
@@ -137,6 +234,7 @@ impl fmt::Display for LineReport {
         match self {
             LineReport::Warning(w) => w.fmt(f),
             LineReport::Failure(message) => f.write_str(message),
+            LineReport::Rendered { ms } => write!(f, "{ms:.1} ms"),
         }
     }
 }
@@ -148,31 +246,52 @@ pub struct BatchCount {
     pub failed: usize,
 }
 
-/// Runs each render command line of `text` with `backend`, handing every warning and
-/// failure to `report` with its line number as it happens. A failing line does not stop
-/// the others.
-pub fn run_batch(text: &str, backend: &Backend, mut report: impl FnMut(usize, LineReport)) -> BatchCount {
+/// Runs each render command line of `text` with `backend` (with a shard, only its share:
+/// the command lines, blank and comment lines not counted, whose 0-based index is K modulo
+/// N), handing every warning, failure and finished line to `report` with its line number as
+/// it happens. A failing line does not stop the others. With `progress`, a bar over the
+/// lines appears on a terminal when the batch takes long; it steps aside while `report`
+/// prints.
+pub fn run_batch(
+    text: &str,
+    backend: &Backend,
+    shard: Option<Split>,
+    progress: bool,
+    mut report: impl FnMut(usize, LineReport),
+) -> BatchCount {
+    let is_command = |line: &&str| line.split_whitespace().next().is_some_and(|w| !w.starts_with('#'));
+    let lines: Vec<(usize, &str)> = text
+        .lines()
+        .enumerate()
+        .filter(|(_, line)| is_command(line))
+        .enumerate()
+        .filter(|(command, _)| shard.is_none_or(|s| s.takes(*command)))
+        .map(|(_, (index, line))| (index + 1, line))
+        .collect();
+    let bar = Progress::new(progress, lines.len() as u64, "lines");
+    let mut tell = |line: usize, what: LineReport| bar.suspend(|| report(line, what));
     let mut count = BatchCount::default();
-    for (index, line) in text.lines().enumerate() {
-        let line_number = index + 1;
+    for (line_number, line) in lines {
         let words: Vec<&str> = line.split_whitespace().collect();
-        if words.is_empty() || words[0].starts_with('#') {
-            continue;
-        }
         count.run += 1;
         let failure = match crate::app::cli::parse_args(&words) {
-            Ok(crate::app::cli::Command::Render(args)) => match run(&args, backend) {
-                Ok(warnings) => {
-                    warnings.into_iter().for_each(|w| report(line_number, LineReport::Warning(w)));
-                    continue;
+            Ok(crate::app::cli::Command::Render(args)) => match run(&args, backend, false) {
+                Ok(done) => {
+                    let ms = done.parse_ms + done.render_ms + done.write_ms;
+                    done.warnings.into_iter().for_each(|w| tell(line_number, LineReport::Warning(w)));
+                    tell(line_number, LineReport::Rendered { ms });
+                    None
                 }
-                Err(e) => e.to_string(),
+                Err(e) => Some(e.to_string()),
             },
-            Ok(_) => "only render command lines can be batched".into(),
-            Err(e) => e.0,
+            Ok(_) => Some("only render command lines can be batched".into()),
+            Err(e) => Some(e.0),
         };
-        count.failed += 1;
-        report(line_number, LineReport::Failure(failure));
+        if let Some(failure) = failure {
+            count.failed += 1;
+            tell(line_number, LineReport::Failure(failure));
+        }
+        bar.advance(1);
     }
     count
 }

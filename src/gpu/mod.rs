@@ -352,10 +352,23 @@ impl GpuRenderer {
         &self,
         scene: &Scene,
         options: &RenderOptions,
+        on_tile: impl FnMut(u32, Frame) -> Result<(), E>,
+    ) -> Result<RenderStats, E> {
+        self.render_band(scene, options, 0, options.height, on_tile)
+    }
+
+    /// As [`GpuRenderer::render_tiles`], for image rows `first .. first + rows` only (a band
+    /// of a render split across machines); tiles still carry image row numbers.
+    pub fn render_band<E: From<GpuError>>(
+        &self,
+        scene: &Scene,
+        options: &RenderOptions,
+        first: u32,
+        rows: u32,
         mut on_tile: impl FnMut(u32, Frame) -> Result<(), E>,
     ) -> Result<RenderStats, E> {
         let prepared = self.prepare(scene, options, false)?;
-        prepared.render(|tile| on_tile(tile.first_row, tile.to_frame()))
+        prepared.render_band(first, rows, |tile| on_tile(tile.first_row, tile.to_frame()))
     }
 
     fn pipeline(&self, config: KernelConfig) -> wgpu::ComputePipeline {

@@ -99,9 +99,21 @@ impl<'a> PreparedScene<'a> {
     /// Renders every tile, top first, handing each to `on_tile` on the calling thread.
     pub fn render<E: From<GpuError>>(
         &self,
+        on_tile: impl FnMut(&PackedTile) -> Result<(), E>,
+    ) -> Result<RenderStats, E> {
+        self.render_band(0, self.options.height, on_tile)
+    }
+
+    /// As [`PreparedScene::render`], for image rows `first .. first + rows` only (a band of
+    /// a render split across machines); tiles still carry image row numbers.
+    pub fn render_band<E: From<GpuError>>(
+        &self,
+        first: u32,
+        rows: u32,
         mut on_tile: impl FnMut(&PackedTile) -> Result<(), E>,
     ) -> Result<RenderStats, E> {
-        let tiles: Vec<(u32, u32)> = row_tiles(self.options.height, self.tile_rows).collect();
+        assert!(first + rows <= self.options.height, "the band lies inside the image");
+        let tiles: Vec<(u32, u32)> = row_tiles(rows, self.tile_rows).map(|(offset, n)| (first + offset, n)).collect();
         let mut stats = self.stats;
         std::thread::scope(|scope| {
             let (ready_tx, ready_rx) = sync_channel(self.slots.len());
