@@ -2,7 +2,7 @@
 
 use crate::app::cli::BackendChoice;
 use raycaster::cpu::Reference;
-use raycaster::gpu::{GpuError, GpuRenderer, RenderStats};
+use raycaster::gpu::{precision, GpuError, GpuRenderer, RenderStats};
 use raycaster::render::{row_tiles, Frame, RenderOptions};
 use raycaster::scene::Scene;
 
@@ -14,6 +14,9 @@ const CPU_TILE_PIXELS: u32 = 1 << 20;
 pub enum Backend {
     Gpu(Box<GpuRenderer>),
     Cpu,
+    /// The GPU, except for scenes its f32 kernel cannot render faithfully
+    /// ([`raycaster::gpu::precision`]), which the CPU reference renders.
+    Auto(Box<GpuRenderer>),
 }
 
 impl Backend {
@@ -24,31 +27,45 @@ impl Backend {
             BackendChoice::Cpu => Ok((Backend::Cpu, None)),
             BackendChoice::Gpu => Ok((Backend::Gpu(Box::new(GpuRenderer::new()?)), None)),
             BackendChoice::Auto => match GpuRenderer::new() {
-                Ok(gpu) => Ok((Backend::Gpu(Box::new(gpu)), None)),
+                Ok(gpu) => Ok((Backend::Auto(Box::new(gpu)), None)),
                 Err(e) => Ok((Backend::Cpu, Some(format!("{e}; rendering with the CPU reference instead")))),
             },
         }
     }
 
     /// Renders in tiles of full rows, top first, handing each tile and its first row to
-    /// `on_tile`; see [`GpuRenderer::render_tiles`].
+    /// `on_tile`; see [`GpuRenderer::render_tiles`]. With `Auto`, a scene outside the f32
+    /// kernel's range is rendered by the CPU reference, and the notice says which value.
     pub fn render_tiles<E: From<GpuError>>(
         &self,
         scene: &Scene,
         options: &RenderOptions,
-        mut on_tile: impl FnMut(u32, Frame) -> Result<(), E>,
-    ) -> Result<RenderStats, E> {
+        on_tile: impl FnMut(u32, Frame) -> Result<(), E>,
+    ) -> Result<(RenderStats, Option<String>), E> {
         match self {
-            Backend::Gpu(gpu) => gpu.render_tiles(scene, options, on_tile),
-            Backend::Cpu => {
-                let reference = Reference::new(scene, options);
-                let mut stats = RenderStats::default();
-                for (first_row, rows) in row_tiles(options.height, CPU_TILE_PIXELS / options.width) {
-                    on_tile(first_row, reference.rows(first_row, rows))?;
-                    stats.tiles += 1;
+            Backend::Gpu(gpu) => Ok((gpu.render_tiles(scene, options, on_tile)?, None)),
+            Backend::Cpu => Ok((cpu_tiles(scene, options, on_tile)?, None)),
+            Backend::Auto(gpu) => match precision::check(scene, options) {
+                Ok(()) => Ok((gpu.render_tiles(scene, options, on_tile)?, None)),
+                Err(e) => {
+                    let notice = format!("{e}; rendering with the f64 CPU reference instead");
+                    Ok((cpu_tiles(scene, options, on_tile)?, Some(notice)))
                 }
-                Ok(stats)
-            }
+            },
         }
     }
+}
+
+fn cpu_tiles<E>(
+    scene: &Scene,
+    options: &RenderOptions,
+    mut on_tile: impl FnMut(u32, Frame) -> Result<(), E>,
+) -> Result<RenderStats, E> {
+    let reference = Reference::new(scene, options);
+    let mut stats = RenderStats::default();
+    for (first_row, rows) in row_tiles(options.height, CPU_TILE_PIXELS / options.width) {
+        on_tile(first_row, reference.rows(first_row, rows))?;
+        stats.tiles += 1;
+    }
+    Ok(stats)
 }

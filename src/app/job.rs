@@ -33,16 +33,17 @@ pub fn options_for(args: &RenderArgs) -> RenderOptions {
 }
 
 /// Loads `args.input`, renders it with `backend` and writes every requested image (all of
-/// them or, on failure, none). Returns the scene's warnings.
+/// them or, on failure, none). Returns the scene's warnings and the backend's notice.
 pub fn run(args: &RenderArgs, backend: &Backend) -> Result<Vec<String>, Error> {
     let scene = scene::load_scene(&args.input)?;
-    render_scene(&scene, args, backend)?;
-    Ok(scene.warnings)
+    let notice = render_scene(&scene, args, backend)?;
+    Ok(scene.warnings.into_iter().chain(notice).collect())
 }
 
 /// Renders an already-loaded scene as `args` asks and writes the images, tile by tile, so
-/// memory stays bounded by the tile whatever the image size.
-pub fn render_scene(scene: &Scene, args: &RenderArgs, backend: &Backend) -> Result<(), Error> {
+/// memory stays bounded by the tile whatever the image size. Returns the backend's notice
+/// when it chose another renderer for this scene.
+pub fn render_scene(scene: &Scene, args: &RenderArgs, backend: &Backend) -> Result<Option<String>, Error> {
     let options = options_for(args);
     let mut outputs = Vec::new();
     if let Some(path) = &args.output {
@@ -54,7 +55,7 @@ pub fn render_scene(scene: &Scene, args: &RenderArgs, backend: &Backend) -> Resu
     if let Some(depth) = &args.depth {
         outputs.push((ImageFile::create(&depth.path, args.width, args.height)?, Kind::Depth(depth.min, depth.max)));
     }
-    backend.render_tiles(scene, &options, |_first_row, tile| {
+    let (_, notice) = backend.render_tiles(scene, &options, |_first_row, tile| {
         for (file, kind) in &mut outputs {
             let rows = match *kind {
                 Kind::Color => image_io::color_image(&tile),
@@ -67,7 +68,7 @@ pub fn render_scene(scene: &Scene, args: &RenderArgs, backend: &Backend) -> Resu
     })?;
     let finished = outputs.into_iter().map(|(file, _)| file.finish()).collect::<Result<Vec<_>, _>>()?;
     image_io::persist_all(finished)?;
-    Ok(())
+    Ok(notice)
 }
 
 /// Which image an output file receives.

@@ -7,6 +7,7 @@
 //! into a [`Frame`].
 
 pub mod buffers;
+pub mod precision;
 
 use crate::camera::PrimaryRays;
 use crate::render::{row_tiles, Frame, RenderOptions, SphereTest, TriangleTest};
@@ -38,6 +39,8 @@ pub enum GpuError {
     TooLarge(String),
     #[error("reading the image back from the GPU failed: {0}")]
     Readback(String),
+    #[error("{0}; render it with --backend cpu")]
+    Precision(precision::PrecisionError),
 }
 
 /// The `override` constants a kernel is compiled with: only what the scene and the requested
@@ -226,6 +229,7 @@ impl GpuRenderer {
         let start = std::time::Instant::now();
         let rays = PrimaryRays::new(&scene.camera, options.width, options.height)
             .expect("the parser rejects cameras whose up is parallel to their direction");
+        precision::check(scene, options).map_err(GpuError::Precision)?;
         let buffers = SceneBuffers::new(scene, &rays, self.bvh_min_primitives);
         let pipeline = self.pipeline(KernelConfig::new(&buffers, options));
         let inputs = self.upload(&buffers)?;

@@ -142,6 +142,9 @@ pub struct Mesh {
     pub positions: Vec<DVec3>,
     /// Triangles as indices into `positions` (fans already triangulated).
     pub triangles: Vec<[u32; 3]>,
+    /// Where each position was read in `path` (its `v`), so that later stages can point at
+    /// a vertex they reject; empty for generated meshes.
+    pub vertex_locations: Vec<Location>,
 }
 
 impl Mesh {
