@@ -2,7 +2,7 @@
 
 use crate::app::cli::BackendChoice;
 use raycaster::cpu::Reference;
-use raycaster::gpu::{precision, GpuError, GpuRenderer, RenderStats};
+use raycaster::gpu::{GpuError, GpuRenderer, RenderStats};
 use raycaster::render::{row_tiles, Frame, RenderOptions};
 use raycaster::scene::Scene;
 
@@ -40,19 +40,37 @@ impl Backend {
         &self,
         scene: &Scene,
         options: &RenderOptions,
-        on_tile: impl FnMut(u32, Frame) -> Result<(), E>,
+        mut on_tile: impl FnMut(u32, Frame) -> Result<(), E>,
     ) -> Result<(RenderStats, Option<String>), E> {
         match self {
             Backend::Gpu(gpu) => Ok((gpu.render_tiles(scene, options, on_tile)?, None)),
             Backend::Cpu => Ok((cpu_tiles(scene, options, on_tile)?, None)),
-            Backend::Auto(gpu) => match precision::check(scene, options) {
-                Ok(()) => Ok((gpu.render_tiles(scene, options, on_tile)?, None)),
-                Err(e) => {
-                    let notice = format!("{e}; rendering with the f64 CPU reference instead");
-                    Ok((cpu_tiles(scene, options, on_tile)?, Some(notice)))
+            Backend::Auto(gpu) => {
+                // The GPU refuses before its first tile, so a refused scene has handed
+                // nothing to `on_tile` yet and the reference can start from the top.
+                match gpu.render_tiles(scene, options, |row, tile| on_tile(row, tile).map_err(Attempt::Tile)) {
+                    Ok(stats) => Ok((stats, None)),
+                    Err(Attempt::Tile(e)) => Err(e),
+                    Err(Attempt::Gpu(GpuError::Precision(e))) => {
+                        let notice = format!("{e}; rendering with the f64 CPU reference instead");
+                        Ok((cpu_tiles(scene, options, on_tile)?, Some(notice)))
+                    }
+                    Err(Attempt::Gpu(e)) => Err(e.into()),
                 }
-            },
+            }
         }
+    }
+}
+
+/// A GPU render's failure, told apart from the caller's own.
+enum Attempt<E> {
+    Gpu(GpuError),
+    Tile(E),
+}
+
+impl<E> From<GpuError> for Attempt<E> {
+    fn from(e: GpuError) -> Self {
+        Attempt::Gpu(e)
     }
 }
 

@@ -229,6 +229,7 @@ impl GpuRenderer {
         let start = std::time::Instant::now();
         let rays = PrimaryRays::new(&scene.camera, options.width, options.height)
             .expect("the parser rejects cameras whose up is parallel to their direction");
+        // Refused before any tile is handed out: `auto` then renders with the reference.
         precision::check(scene, options).map_err(GpuError::Precision)?;
         let buffers = SceneBuffers::new(scene, &rays, self.bvh_min_primitives);
         let pipeline = self.pipeline(KernelConfig::new(&buffers, options));

@@ -34,12 +34,14 @@
 //! offsets (the plane's distance from the camera), the camera's extent (orthographic
 //! `size`, perspective `1/tan(angle/2)`) and, for a sphere under a non-uniform transform,
 //! its centre, its half-extents, the largest entry of the world-to-unit-sphere matrix and
-//! the camera's position in the unit sphere's space. A component far below the largest of
-//! its vector is absorbed by rounding in every sum it enters, so its own underflow does not
-//! matter; unit vectors (ray and light directions, plane normals, the camera basis) are
-//! normalised in f64 and always in range. Colours (light, ambient, diffuse, background)
-//! need only the upper bound: a colour product of up to three factors stays finite, and a
-//! colour factor small enough to underflow makes a term far below one 8-bit level.
+//! the camera's position in the unit sphere's space (the matrix's entries are about
+//! 1/size, so such a sphere must be between about 2⁻²⁸ and 2²⁵ large). A component far
+//! below the largest of its vector is absorbed by rounding in every sum it enters, so its
+//! own underflow does not matter; unit vectors (ray and light directions, plane normals,
+//! the camera basis) are normalised in f64 and always in range. Colours (light, ambient,
+//! diffuse, background) need only the upper bound: a colour product of up to three factors
+//! stays finite, and a colour factor small enough to underflow makes a term far below one
+//! 8-bit level.
 //!
 //! What this does not promise: relative precision. A sphere of radius 1 seen 2²⁸ units
 //! away is within range, but f32 cannot place its surface to better than 2⁴ units; the
