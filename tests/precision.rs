@@ -82,8 +82,9 @@ enum Expect {
     Faithful,
     /// The GPU renders it like the reference, and nothing is visible.
     Empty,
-    /// Refused: the file (scene or mesh), line, column and the start of the description.
-    Refused { file: &'static str, line: u32, col: u32, what: &'static str },
+    /// Refused: the file (scene or mesh), the line, the word on it where the column must
+    /// point, and the start of the description.
+    Refused { file: &'static str, line: u32, word: &'static str, what: &'static str },
 }
 
 struct Case {
@@ -93,8 +94,9 @@ struct Case {
     expect: Expect,
 }
 
-fn refused_object(what: &'static str) -> Expect {
-    Expect::Refused { file: "scene.txt", line: OBJECT_LINE, col: 5, what }
+/// Refused at `word` on the object's line.
+fn refused_at(word: &'static str, what: &'static str) -> Expect {
+    Expect::Refused { file: "scene.txt", line: OBJECT_LINE, word, what }
 }
 
 fn cases() -> Vec<Case> {
@@ -109,37 +111,37 @@ fn cases() -> Vec<Case> {
     let (hi, hi_out, lo, lo_out) = (p(28), p(29), p(-25), p(-26));
     let sphere = |c: [f64; 3], r: f64| format!("Sphere {{ center {} radius {} }}", c.map(n).join(" "), n(r));
 
-    add("sphere radius, large", hi, hi_out, refused_object("Sphere radius"), &|m| {
+    add("sphere radius, large", hi, hi_out, refused_at("radius", "Sphere radius"), &|m| {
         (scene_text(&ortho(m / 2.0), &sphere([0.0; 3], m)), None)
     });
-    add("sphere radius, small", lo, lo_out, refused_object("Sphere radius"), &|m| {
+    add("sphere radius, small", lo, lo_out, refused_at("radius", "Sphere radius"), &|m| {
         (scene_text(&ortho(4.0 * m), &sphere([0.0, 0.0, -2.0 * m], m)), None)
     });
-    add("sphere centre, far", hi, hi_out, refused_object("Sphere center"), &|m| {
+    add("sphere centre, far", hi, hi_out, refused_at("center", "Sphere center"), &|m| {
         (scene_text(&ortho(m / 2.0), &sphere([0.0, 0.0, -m], m / 4.0)), None)
     });
-    add("sphere centre, near", lo, lo_out, refused_object("Sphere center"), &|m| {
+    add("sphere centre, near", lo, lo_out, refused_at("center", "Sphere center"), &|m| {
         (scene_text(&ortho(8.0 * m), &sphere([m, 0.0, 0.0], 2.0 * m)), None)
     });
-    add("triangle vertex, far", hi, hi_out, refused_object("Triangle vertex0"), &|m| {
+    add("triangle vertex, far", hi, hi_out, refused_at("vertex0", "Triangle vertex0"), &|m| {
         (scene_text(&ortho(m / 2.0), &triangle(far_triangle(m))), None)
     });
-    add("triangle vertex, near", lo, lo_out, refused_object("Triangle vertex0"), &|m| {
+    add("triangle vertex, near", lo, lo_out, refused_at("vertex0", "Triangle vertex0"), &|m| {
         (scene_text(&ortho(8.0 * m), &triangle(near_triangle(m))), None)
     });
-    let vertex = || Expect::Refused { file: "mesh.obj", line: 3, col: 3, what: "mesh vertex 1" };
+    let vertex = || Expect::Refused { file: "mesh.obj", line: 3, word: "v", what: "mesh vertex 1" };
     add("OBJ vertex, far", hi, hi_out, vertex(), &|m| (scene_text(&ortho(m / 2.0), MESH), Some(obj(far_triangle(m)))));
     add("OBJ vertex, near", lo, lo_out, vertex(), &|m| {
         (scene_text(&ortho(8.0 * m), MESH), Some(obj(near_triangle(m))))
     });
     let plane = |m: f64| format!("Plane {{ normal 0 1 0 offset {} }}", n(-m));
     let looking_down = |m: f64| (scene_text(&perspective(0.0, "0 -0.5 -1", "60"), &plane(m)), None);
-    add("plane offset, far", hi, hi_out, refused_object("Plane offset"), &looking_down);
-    add("plane offset, near", lo, lo_out, refused_object("Plane offset"), &looking_down);
+    add("plane offset, far", hi, hi_out, refused_at("offset", "Plane offset"), &looking_down);
+    add("plane offset, near", lo, lo_out, refused_at("offset", "Plane offset"), &looking_down);
     // Scale 1 1 e: the matrix to the unit sphere's space has the entry 1/e.
     let squashed = |e: f64| format!("Transform {{ Scale 1 1 {} {} }}", n(e), sphere([0.0; 3], 1.0));
-    // Column 0: wherever `Sphere` is on the object line.
-    let in_transform = |what| Expect::Refused { file: "scene.txt", line: OBJECT_LINE, col: 0, what };
+    // A radius fine in itself, scaled out of range: the Transform is to blame.
+    let in_transform = |what| refused_at("Transform", what);
     add("transform entry (1/scale), large", p(-28), p(-29), in_transform("transformed Sphere inverse-matrix"), &|e| {
         (scene_text(&ortho(4.0), &squashed(e)), None)
     });
@@ -156,10 +158,15 @@ fn cases() -> Vec<Case> {
     add("transformed sphere extent, large", hi, hi_out, in_transform("transformed Sphere half-extent"), &|m| {
         (scene_text(&ortho(m / 64.0), &long(m)), None)
     });
-    add("camera far away", hi, hi_out, refused_object("Sphere center"), &|m| {
+    let enlarged = |s: f64| format!("Transform {{ UniformScale {} {} }}", n(s), sphere([0.0; 3], p(26)));
+    add("uniform scale, large", 4.0, 8.0, in_transform("Sphere radius"), &|s| {
+        (scene_text(&ortho(p(27)), &enlarged(s)), None)
+    });
+    add("camera far away", hi, hi_out, refused_at("center", "Sphere center"), &|m| {
         (scene_text(&perspective(m, "0 0 -1", "30"), &sphere([0.0; 3], m / 4.0)), None)
     });
-    let camera = || Expect::Refused { file: "scene.txt", line: 1, col: 1, what: "OrthographicCamera size" };
+    let camera =
+        || Expect::Refused { file: "scene.txt", line: 1, word: "OrthographicCamera", what: "OrthographicCamera size" };
     add("orthographic size, large", hi, hi_out, camera(), &|m| {
         (scene_text(&ortho(m), &sphere([0.0; 3], m / 4.0)), None)
     });
@@ -179,20 +186,25 @@ fn cases() -> Vec<Case> {
         name: "sphere radius 1e39".into(),
         scene: scene_text(&ortho(4.0), "Sphere { center 0 0 -5 radius 1e39 }"),
         obj: None,
-        expect: refused_object("Sphere radius"),
+        expect: refused_at("radius", "Sphere radius"),
     });
     cases.push(Case {
         name: "OBJ vertex 1e39".into(),
         scene: scene_text(&ortho(4.0), MESH),
         obj: Some("# precision test\n\n  v 0 1e39 -1\nv 1 0 -1\nv 0 1 -1\nf 1 2 3\n".into()),
-        expect: Expect::Refused { file: "mesh.obj", line: 3, col: 3, what: "mesh vertex 1" },
+        expect: Expect::Refused { file: "mesh.obj", line: 3, word: "v", what: "mesh vertex 1" },
     });
     // A perspective camera's extent is 1/tan(angle/2): 1.1e9 for 1e-7 degrees.
     cases.push(Case {
         name: "perspective angle 1e-7 degrees".into(),
         scene: scene_text(&perspective(4.0, "0 0 -1", "1e-7"), &sphere([0.0; 3], 1.0)),
         obj: None,
-        expect: Expect::Refused { file: "scene.txt", line: 1, col: 1, what: "PerspectiveCamera 1/tan(angle/2)" },
+        expect: Expect::Refused {
+            file: "scene.txt",
+            line: 1,
+            word: "PerspectiveCamera",
+            what: "PerspectiveCamera 1/tan(angle/2)",
+        },
     });
     cases
 }
@@ -218,9 +230,10 @@ fn each_value_just_inside_renders_like_the_reference_and_just_outside_is_refused
         let scene = load_scene(&path).unwrap_or_else(|e| panic!("{}: {e}", case.name));
         let checked = precision::check(&scene, &options);
         match case.expect {
-            Expect::Refused { file, line, col, what } => {
-                let object_line = case.scene.lines().nth(OBJECT_LINE as usize - 1).unwrap();
-                let col = if col == 0 { object_line.find("Sphere").unwrap() as u32 + 1 } else { col };
+            Expect::Refused { file, line, word, what } => {
+                let text = if file == "mesh.obj" { case.obj.as_deref().unwrap() } else { &case.scene };
+                let text_line = text.lines().nth(line as usize - 1).unwrap();
+                let col = text_line.find(&format!("{word} ")).unwrap() as u32 + 1;
                 let Err(e) = checked else {
                     failures.push(format!("{}: accepted, expected refused", case.name));
                     continue;

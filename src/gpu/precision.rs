@@ -15,12 +15,17 @@
 //! exactly 0, or within [2⁻²⁵, 2²⁸] ≈ [3.0e-8, 2.7e8]
 //! ```
 //!
-//! and otherwise refuses with the place of the offending value ([`check`]). The bound does
-//! not depend on the exact intersection formulas, only on their degree: the kernel forms
-//! products of at most four such values (degree ≤ 3 in coordinates for any ray/triangle
-//! test: determinants, edge functions, Cramer's rule, edge planes through the eye; degree 2
-//! for spheres; for ellipsoids `a·Δ` multiplies two matrix entries by two unit-space
-//! coordinates), each factor a sum or difference of a few values, summed over a few terms.
+//! and otherwise refuses with the place of the offending value ([`check`]): the field as
+//! written (`radius`, `vertex1`, …), the innermost Transform when it is what scaled a
+//! radius out of range, the `v` line of a mesh vertex in its OBJ file, the camera block for
+//! its extent.
+//!
+//! The bound does not depend on the exact intersection formulas, only on their degree: the
+//! kernel forms products of at most four such values (degree ≤ 3 in coordinates for any
+//! ray/triangle test: determinants, edge functions, Cramer's rule, edge planes through the
+//! eye; degree 2 for spheres; for ellipsoids `a·Δ` multiplies two matrix entries by two
+//! unit-space coordinates), each factor a sum or difference of a few values, summed over a
+//! few terms.
 //!
 //! - Overflow: a factor is at most 4·2²⁸ (a difference of two values, doubled once more by
 //!   the watertight test's shear), so a product of four is below 2¹²⁰ and sums of up to
@@ -64,8 +69,8 @@ pub const MAX_MAGNITUDE: f64 = 268_435_456.0;
 pub struct PrecisionError {
     /// The file holding the value: the scene, or the OBJ file of a mesh vertex.
     pub file: PathBuf,
-    /// Where in `file`: the object (or the mesh's `v` line); `None` for values the scene
-    /// model keeps no place for (light and material colours).
+    /// Where in `file` (see the module's contract); `None` for values the scene model keeps
+    /// no place for (light, background and material colours).
     pub location: Option<Location>,
     /// What the value is, e.g. `Sphere radius`.
     pub what: String,
@@ -115,7 +120,7 @@ pub fn check(scene: &Scene, options: &RenderOptions) -> Result<(), PrecisionErro
     for (k, material) in scene.materials.iter().enumerate() {
         checker.colour(&format!("Material {} diffuseColor", k), material.diffuse)?;
     }
-    checker.objects(&scene.root, &DMat4::from_translation(-scene.camera.center))
+    checker.objects(&scene.root, &DMat4::from_translation(-scene.camera.center), None)
 }
 
 struct Checker<'a> {
@@ -163,50 +168,62 @@ impl Checker<'_> {
     }
 
     /// `matrix` maps the current object space to camera-relative world space, as in
-    /// [`super::buffers`]; the depth is bounded by the parser's nesting limit.
-    fn objects(&self, objects: &[Object], matrix: &DMat4) -> Result<(), PrecisionError> {
+    /// [`super::buffers`]; `transform` is the innermost enclosing Transform. The depth is
+    /// bounded by the parser's nesting limit.
+    fn objects(&self, objects: &[Object], matrix: &DMat4, transform: Option<Location>) -> Result<(), PrecisionError> {
         for object in objects {
-            let at = object.location;
+            // A field's own place where the parser kept it, else the object's.
+            let field = |k: usize| Some(object.fields[k]).filter(|l| l.line != 0).unwrap_or(object.location);
             match &object.shape {
-                Shape::Group(children) => self.objects(children, matrix)?,
-                Shape::Transform { matrix: m, child } => self.objects(std::slice::from_ref(child), &(*matrix * *m))?,
-                Shape::Sphere { center, radius, .. } => self.sphere(at, matrix, *center, *radius)?,
+                Shape::Group(children) => self.objects(children, matrix, transform)?,
+                Shape::Transform { matrix: m, child } => {
+                    self.objects(std::slice::from_ref(child), &(*matrix * *m), Some(object.location))?
+                }
+                Shape::Sphere { center, radius, .. } => {
+                    // A radius fine in itself is made out of range by the transform around it.
+                    let scaled_by = if in_range(*radius) { transform.unwrap_or(field(1)) } else { field(1) };
+                    self.sphere([field(0), field(1), scaled_by], matrix, *center, *radius)?
+                }
                 Shape::Plane { normal, offset, .. } => {
                     let n = normal.normalize();
                     let world_normal = DMat3::from_mat4(*matrix).inverse().transpose().mul_vec3(n).normalize();
-                    self.vector(at, "Plane normal", world_normal)?;
+                    self.vector(field(0), "Plane normal", world_normal)?;
                     let offset = world_normal.dot(matrix.transform_point3(*offset * n));
-                    self.scalar(Some(at), "Plane offset from the camera", offset)?;
+                    self.scalar(Some(field(1)), "Plane offset from the camera", offset)?;
                 }
                 Shape::Triangle { vertices, .. } => {
                     for (k, v) in vertices.iter().enumerate() {
-                        self.vector(at, &format!("Triangle vertex{k}"), matrix.transform_point3(*v))?;
+                        self.vector(field(k), &format!("Triangle vertex{k}"), matrix.transform_point3(*v))?;
                     }
                 }
-                Shape::Mesh { mesh, .. } => self.mesh(at, matrix, mesh)?,
+                Shape::Mesh { mesh, .. } => self.mesh(object.location, matrix, mesh)?,
             }
         }
         Ok(())
     }
 
     /// The same cases as the flattening: a sphere under a similarity stays a sphere, any
-    /// other keeps the matrix to the unit sphere's space.
-    fn sphere(&self, at: Location, matrix: &DMat4, center: DVec3, radius: f64) -> Result<(), PrecisionError> {
+    /// other keeps the matrix to the unit sphere's space. `at`: where the centre and the
+    /// radius were written, and what scaled the radius (the radius itself or a Transform).
+    fn sphere(&self, at: [Location; 3], matrix: &DMat4, center: DVec3, radius: f64) -> Result<(), PrecisionError> {
+        let [center_at, radius_at, scaled_at] = at;
         let linear = DMat3::from_mat4(*matrix);
         if let Some(scale) = super::buffers::similarity_scale(&linear) {
-            self.vector(at, "Sphere center", matrix.transform_point3(center))?;
+            self.vector(center_at, "Sphere center", matrix.transform_point3(center))?;
+            let at = if scale == 1.0 { radius_at } else { scaled_at };
             return self.scalar(Some(at), "Sphere radius", radius * scale);
         }
         let to_world = *matrix * DMat4::from_translation(center) * DMat4::from_scale(DVec3::splat(radius));
         let to_unit = to_world.inverse();
-        self.vector(at, "transformed Sphere center", to_world.w_axis.truncate())?;
+        self.vector(center_at, "transformed Sphere center", to_world.w_axis.truncate())?;
         let half = DVec3::from_array([0, 1, 2].map(|r| to_world.row(r).truncate().length()));
-        self.vector(at, "transformed Sphere half-extent", half)?;
+        self.vector(scaled_at, "transformed Sphere half-extent", half)?;
         let entries = DMat3::from_mat4(to_unit).to_cols_array();
         let largest = entries.iter().try_fold(0.0_f64, |m, e| (!e.is_nan()).then(|| m.max(e.abs())));
-        self.scalar(Some(at), "transformed Sphere inverse-matrix entry", largest.unwrap_or(f64::NAN))?;
+        self.scalar(Some(scaled_at), "transformed Sphere inverse-matrix entry", largest.unwrap_or(f64::NAN))?;
         // The camera is the origin: its place in the unit sphere's space is to_unit · 0.
-        self.vector(at, "camera position in the transformed Sphere's unit space", to_unit.w_axis.truncate())
+        let camera = to_unit.w_axis.truncate();
+        self.vector(scaled_at, "camera position in the transformed Sphere's unit space", camera)
     }
 
     /// Every vertex a triangle uses (an unused one never reaches the kernel), first in file

@@ -101,6 +101,10 @@ pub struct Material {
 pub struct Object {
     pub shape: Shape,
     pub location: Location,
+    /// Where a leaf's fields were written (their names), for later stages that reject a
+    /// value the parser accepted: `center`, `radius` of a Sphere; `normal`, `offset` of a
+    /// Plane; `vertex0`…`vertex2` of a Triangle. `Location::default()` (line 0) elsewhere.
+    pub fields: [Location; 3],
 }
 
 /// What a node is. Leaves carry the index of the material that was current when they
