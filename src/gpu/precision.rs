@@ -50,7 +50,9 @@
 //!
 //! What this does not promise: relative precision. A sphere of radius 1 seen 2²⁸ units
 //! away is within range, but f32 cannot place its surface to better than 2⁴ units; the
-//! accuracy tests (`tests/hard_cases.rs`) measure how far that goes.
+//! accuracy tests (`tests/hard_cases.rs`) measure how far that goes. It shows through very
+//! narrow perspective cameras (pixels off once `1/tan(angle/2)` times the longer image
+//! side exceeds about 2²², README "Single precision"), which this range check lets pass.
 
 use crate::camera::PrimaryRays;
 use crate::render::RenderOptions;
