@@ -46,6 +46,9 @@ fn render(args: &RenderArgs, habits: Habits) -> Result<(), Failure> {
     let backend = open_backend(args.backend, habits)?;
     let report = app::job::run(args, &backend, habits.verbosity != Verbosity::Quiet)?;
     warn(&report.warnings, habits);
+    if let Some(fallback) = report.notice.as_ref().filter(|_| habits.verbosity != Verbosity::Quiet) {
+        say(&format!("warning: {fallback}"));
+    }
     if habits.verbosity == Verbosity::Verbose {
         notice(&report.verbose_lines(&backend, args));
     }
@@ -84,7 +87,7 @@ fn batch(
             shard,
             habits.verbosity != Verbosity::Quiet,
             |line, report| match report {
-                LineReport::Warning(_) if habits.verbosity == Verbosity::Quiet => {}
+                LineReport::Warning(_) | LineReport::Fallback(_) if habits.verbosity == Verbosity::Quiet => {}
                 LineReport::Rendered { .. } if habits.verbosity == Verbosity::Verbose => {
                     timings.push(located(line, &report))
                 }

@@ -249,6 +249,7 @@ fn write_obj_round_trips_exactly() {
             DVec3::new(std::f64::consts::PI, -std::f64::consts::E, 2f64.sqrt() * 1e300),
         ],
         triangles: vec![[0, 1, 2], [3, 2, 1], [0, 0, 3]],
+        vertex_locations: Vec::new(),
     };
     let meshes = [
         icosphere(DVec3::new(0.1, 0.2, 0.3), 0.7, 3),
@@ -271,11 +272,21 @@ fn write_obj_rejects_what_obj_cannot_hold() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("bad.obj");
     for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
-        let mesh = Mesh { path: "x".into(), positions: vec![DVec3::new(0.0, bad, 0.0)], triangles: vec![] };
+        let mesh = Mesh {
+            path: "x".into(),
+            positions: vec![DVec3::new(0.0, bad, 0.0)],
+            triangles: vec![],
+            vertex_locations: vec![],
+        };
         assert_eq!(write_obj(&mesh, &path).unwrap_err().kind(), std::io::ErrorKind::InvalidInput);
         assert!(!path.exists());
     }
-    let mesh = Mesh { path: "x".into(), positions: vec![DVec3::ZERO; 3], triangles: vec![[0, 1, 3]] };
+    let mesh = Mesh {
+        path: "x".into(),
+        positions: vec![DVec3::ZERO; 3],
+        triangles: vec![[0, 1, 3]],
+        vertex_locations: vec![],
+    };
     assert_eq!(write_obj(&mesh, &path).unwrap_err().kind(), std::io::ErrorKind::InvalidInput);
     assert!(!path.exists());
     assert!(write_obj(&grid(0.0, 0.0, 1.0, 1.0, 1, 1, 0.0), &dir.path().join("no/such/dir.obj")).is_err());

@@ -14,8 +14,19 @@ const CPU_TILE_PIXELS: u32 = 1 << 18;
 
 /// A ready renderer.
 pub enum Backend {
-    Gpu(Box<GpuRenderer>),
+    /// The GPU kernel; with `fallback` (`--backend auto`), scenes its f32 kernel cannot
+    /// render faithfully ([`raycaster::gpu::precision`]) go to the CPU reference instead.
+    Gpu(Box<GpuRenderer>, Fallback),
     Cpu,
+}
+
+/// Whether a GPU backend hands scenes outside its f32 range to the reference.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Fallback {
+    /// `--backend gpu`: refuse them.
+    Refuse,
+    /// `--backend auto`: render them with the f64 reference, with a notice.
+    Reference,
 }
 
 impl Backend {
@@ -24,9 +35,9 @@ impl Backend {
     pub fn open(choice: BackendChoice) -> Result<(Backend, Option<String>), GpuError> {
         match choice {
             BackendChoice::Cpu => Ok((Backend::Cpu, None)),
-            BackendChoice::Gpu => Ok((Backend::Gpu(Box::new(GpuRenderer::new()?)), None)),
+            BackendChoice::Gpu => Ok((Backend::Gpu(Box::new(GpuRenderer::new()?), Fallback::Refuse), None)),
             BackendChoice::Auto => match GpuRenderer::new() {
-                Ok(gpu) => Ok((Backend::Gpu(Box::new(gpu)), None)),
+                Ok(gpu) => Ok((Backend::Gpu(Box::new(gpu), Fallback::Reference), None)),
                 Err(e) => Ok((Backend::Cpu, Some(format!("{e}; rendering with the CPU reference instead")))),
             },
         }
@@ -35,7 +46,7 @@ impl Backend {
     /// What renders, in words: the adapter, or the reference and its threads.
     pub fn describe(&self) -> String {
         match self {
-            Backend::Gpu(gpu) => {
+            Backend::Gpu(gpu, _) => {
                 let info = gpu.adapter_info();
                 format!("gpu, {} ({:?}, {:?})", info.name, info.backend, info.device_type)
             }
@@ -48,7 +59,8 @@ impl Backend {
 
     /// Renders image rows `first .. first + rows` (the whole image, or one band of a split
     /// render) in tiles of full rows, top first, handing each tile and its first image row
-    /// to `on_tile`; see [`GpuRenderer::render_band`].
+    /// to `on_tile`; see [`GpuRenderer::render_band`]. Returns the statistics, and a notice
+    /// when `auto` handed the scene to the reference.
     pub fn render_band<E: From<GpuError>>(
         &self,
         scene: &Scene,
@@ -56,19 +68,15 @@ impl Backend {
         first: u32,
         rows: u32,
         mut on_tile: impl FnMut(u32, Frame) -> Result<(), E>,
-    ) -> Result<RenderStats, E> {
+    ) -> Result<(RenderStats, Option<String>), E> {
         match self {
-            Backend::Gpu(gpu) => gpu.render_band(scene, options, first, rows, on_tile),
-            Backend::Cpu => {
-                let reference = Reference::new(scene, options);
-                let mut stats = RenderStats::default();
-                for (offset, rows) in row_tiles(rows, CPU_TILE_PIXELS / options.width) {
-                    let first_row = first + offset;
-                    on_tile(first_row, reference.rows(first_row, rows))?;
-                    stats.tiles += 1;
-                }
-                Ok(stats)
-            }
+            Backend::Gpu(gpu, fallback) => or_reference(
+                *fallback,
+                &mut on_tile,
+                |on_tile| gpu.render_band(scene, options, first, rows, |r, t| on_tile(r, t).map_err(Attempt::Tile)),
+                |on_tile| reference_band(scene, options, (first, rows), on_tile),
+            ),
+            Backend::Cpu => Ok((reference_band(scene, options, (first, rows), on_tile)?, None)),
         }
     }
 
@@ -83,29 +91,87 @@ impl Backend {
         depth_range: (f32, f32),
         (first, rows): (u32, u32),
         mut on_tile: impl FnMut(u32, ImageRows) -> Result<(), E>,
-    ) -> Result<RenderStats, E> {
+    ) -> Result<(RenderStats, Option<String>), E> {
         let (min, max) = depth_range;
+        let from_frame = |frame: &Frame| ImageRows {
+            rows: frame.height,
+            color: options.color.then(|| image_io::color_image(frame).into_raw()),
+            normals: options.normals.then(|| image_io::normals_image(frame).into_raw()),
+            depth: options.depth.then(|| image_io::depth_image(frame, min, max).into_raw()),
+        };
         match self {
-            Backend::Gpu(gpu) => gpu.prepare(scene, options, true)?.render_band(first, rows, |tile| {
-                let rows = ImageRows {
-                    rows: tile.rows,
-                    color: options.color.then(|| tile.color_rgb()),
-                    normals: options.normals.then(|| tile.normals_rgb()),
-                    depth: options.depth.then(|| tile.depth_rgb(min, max)),
-                };
-                on_tile(tile.first_row, rows)
-            }),
-            Backend::Cpu => self.render_band(scene, options, first, rows, |first_row, frame| {
-                let rows = ImageRows {
-                    rows: frame.height,
-                    color: options.color.then(|| image_io::color_image(&frame).into_raw()),
-                    normals: options.normals.then(|| image_io::normals_image(&frame).into_raw()),
-                    depth: options.depth.then(|| image_io::depth_image(&frame, min, max).into_raw()),
-                };
-                on_tile(first_row, rows)
-            }),
+            Backend::Gpu(gpu, fallback) => or_reference(
+                *fallback,
+                &mut on_tile,
+                |on_tile| {
+                    gpu.prepare(scene, options, true)?.render_band(first, rows, |tile| {
+                        let rows = ImageRows {
+                            rows: tile.rows,
+                            color: options.color.then(|| tile.color_rgb()),
+                            normals: options.normals.then(|| tile.normals_rgb()),
+                            depth: options.depth.then(|| tile.depth_rgb(min, max)),
+                        };
+                        on_tile(tile.first_row, rows).map_err(Attempt::Tile)
+                    })
+                },
+                |on_tile| reference_band(scene, options, (first, rows), |row, frame| on_tile(row, from_frame(&frame))),
+            ),
+            Backend::Cpu => {
+                let stats =
+                    reference_band(scene, options, (first, rows), |row, frame| on_tile(row, from_frame(&frame)))?;
+                Ok((stats, None))
+            }
         }
     }
+}
+
+/// The GPU's render, or with [`Fallback::Reference`] and a scene the GPU refuses for its
+/// f32 range, the reference's, with a notice naming the value. The GPU refuses before its
+/// first tile, so nothing has reached `on_tile` yet and the reference starts from the top.
+fn or_reference<T, E: From<GpuError>>(
+    fallback: Fallback,
+    on_tile: &mut T,
+    gpu: impl FnOnce(&mut T) -> Result<RenderStats, Attempt<E>>,
+    reference: impl FnOnce(&mut T) -> Result<RenderStats, E>,
+) -> Result<(RenderStats, Option<String>), E> {
+    match gpu(on_tile) {
+        Ok(stats) => Ok((stats, None)),
+        Err(Attempt::Tile(e)) => Err(e),
+        Err(Attempt::Gpu(GpuError::Precision(e))) if fallback == Fallback::Reference => {
+            let notice = format!("{e}; rendering with the f64 CPU reference instead");
+            Ok((reference(on_tile)?, Some(notice)))
+        }
+        Err(Attempt::Gpu(e)) => Err(e.into()),
+    }
+}
+
+/// A GPU render's failure, told apart from the caller's own.
+enum Attempt<E> {
+    Gpu(GpuError),
+    Tile(E),
+}
+
+impl<E> From<GpuError> for Attempt<E> {
+    fn from(e: GpuError) -> Self {
+        Attempt::Gpu(e)
+    }
+}
+
+/// The f64 reference over image rows `first .. first + rows`, in tiles.
+fn reference_band<E>(
+    scene: &Scene,
+    options: &RenderOptions,
+    (first, rows): (u32, u32),
+    mut on_tile: impl FnMut(u32, Frame) -> Result<(), E>,
+) -> Result<RenderStats, E> {
+    let reference = Reference::new(scene, options);
+    let mut stats = RenderStats::default();
+    for (offset, rows) in row_tiles(rows, CPU_TILE_PIXELS / options.width) {
+        let first_row = first + offset;
+        on_tile(first_row, reference.rows(first_row, rows))?;
+        stats.tiles += 1;
+    }
+    Ok(stats)
 }
 
 /// One tile's rows of each 8-bit image asked for, RGB, top row first.

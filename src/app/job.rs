@@ -45,6 +45,8 @@ pub fn options_for(args: &RenderArgs) -> RenderOptions {
 #[derive(Clone, Debug)]
 pub struct Report {
     pub warnings: Vec<SceneWarning>,
+    /// Why `auto` rendered this scene with the reference, when it did.
+    pub notice: Option<String>,
     pub stats: RenderStats,
     pub parse_ms: f64,
     /// The backend's time, from the first tile's preparation to the last tile's read-back,
@@ -61,7 +63,7 @@ impl Report {
         let mut lines = vec![format!("backend: {}", backend.describe())];
         let tiles = if stats.tiles == 1 { "1 tile".to_string() } else { format!("{} tiles", stats.tiles) };
         let mut time = format!("time: parsing {:.1} ms, rendering {:.1} ms in {tiles}", self.parse_ms, self.render_ms);
-        if let Backend::Gpu(_) = backend {
+        if let Backend::Gpu(..) = backend {
             lines.push(format!(
                 "kernel: {} triangle test, {} sphere test",
                 args.triangle_test.name(),
@@ -80,7 +82,7 @@ impl Report {
         time += &format!(", writing {:.1} ms", self.write_ms);
         lines.push(time);
         let mut memory = format!("memory: peak resident {:.0} MiB", crate::app::bench::peak_memory_mib());
-        if let Backend::Gpu(_) = backend {
+        if let Backend::Gpu(..) = backend {
             memory += &format!(", scene data on the GPU {:.1} KiB", stats.scene_bytes as f64 / 1024.0);
         }
         lines.push(memory);
@@ -95,20 +97,20 @@ pub fn run(args: &RenderArgs, backend: &Backend, progress: bool) -> Result<Repor
     let start = Instant::now();
     let scene = scene::load_scene(&args.input)?;
     let parse_ms = start.elapsed().as_secs_f64() * 1e3;
-    let (stats, render_ms, write_ms) = render_scene(&scene, args, backend, progress)?;
-    Ok(Report { warnings: scene.warnings, stats, parse_ms, render_ms, write_ms })
+    let (stats, notice, render_ms, write_ms) = render_scene(&scene, args, backend, progress)?;
+    Ok(Report { warnings: scene.warnings, notice, stats, parse_ms, render_ms, write_ms })
 }
 
 /// Renders an already-loaded scene as `args` asks and writes the images, tile by tile, so
 /// memory stays bounded by the tile whatever the image size. With `--tile K/N` only band K
-/// is rendered, into part files. Returns the backend's statistics, and the milliseconds
-/// spent rendering and writing.
+/// is rendered, into part files. Returns the backend's statistics and notice (see
+/// [`Backend::render_band`]), and the milliseconds spent rendering and writing.
 pub fn render_scene(
     scene: &Scene,
     args: &RenderArgs,
     backend: &Backend,
     progress: bool,
-) -> Result<(RenderStats, f64, f64), Error> {
+) -> Result<(RenderStats, Option<String>, f64, f64), Error> {
     let start = Instant::now();
     let mut writing = std::time::Duration::ZERO;
     let options = options_for(args);
@@ -134,7 +136,7 @@ pub fn render_scene(
         bar.advance(u64::from(rows));
         Ok::<(), Error>(())
     };
-    let stats = if outputs.iter().any(|o| o.format == ImageFormat::Exr) {
+    let (stats, notice) = if outputs.iter().any(|o| o.format == ImageFormat::Exr) {
         // Floats leave the backend as they are, for the EXR files.
         backend.render_band(scene, &options, band.0, band.1, |_first_row, tile| {
             write(tile.height, &mut |o| o.pixels(&tile))
@@ -153,7 +155,7 @@ pub fn render_scene(
     let finished = sinks.into_iter().map(Sink::finish).collect::<Result<Vec<_>, _>>()?;
     image_io::persist_all(finished)?;
     let write_ms = (writing + finishing.elapsed()).as_secs_f64() * 1e3;
-    Ok((stats, render_ms, write_ms))
+    Ok((stats, notice, render_ms, write_ms))
 }
 
 /// What `raycaster compare` found: the GPU against the reference, per output.
@@ -221,6 +223,8 @@ pub fn compare(args: &RenderArgs, outputs: Outputs, gpu: &raycaster::gpu::GpuRen
 #[derive(Debug)]
 pub enum LineReport {
     Warning(SceneWarning),
+    /// `auto` rendered the line with the reference, and why.
+    Fallback(String),
     Failure(String),
     /// The line rendered, in this many milliseconds (parsing, rendering, writing; for
     /// `--verbose`).
@@ -233,6 +237,7 @@ impl fmt::Display for LineReport {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             LineReport::Warning(w) => w.fmt(f),
+            LineReport::Fallback(notice) => write!(f, "warning: {notice}"),
             LineReport::Failure(message) => f.write_str(message),
             LineReport::Rendered { ms } => write!(f, "{ms:.1} ms"),
         }
@@ -279,6 +284,9 @@ pub fn run_batch(
                 Ok(done) => {
                     let ms = done.parse_ms + done.render_ms + done.write_ms;
                     done.warnings.into_iter().for_each(|w| tell(line_number, LineReport::Warning(w)));
+                    if let Some(fallback) = done.notice {
+                        tell(line_number, LineReport::Fallback(fallback));
+                    }
                     tell(line_number, LineReport::Rendered { ms });
                     None
                 }

@@ -190,7 +190,7 @@ pub fn scene_hash(scene: &Scene) -> Result<String, String> {
 pub fn flags_text(args: &RenderArgs, backend: &Backend) -> String {
     let shade_back = if args.shade_back { " -shade_back" } else { "" };
     match backend {
-        Backend::Gpu(_) => format!(
+        Backend::Gpu(..) => format!(
             "--backend gpu --triangle-test {} --sphere-test {}{shade_back}",
             args.triangle_test.name(),
             args.sphere_test.name()

@@ -244,7 +244,7 @@ fn padded_box(center: DVec3, half: DVec3) -> Aabb {
 
 /// `Some(s)` when `linear` is `s` times a rotation or reflection (columns orthogonal and of
 /// equal length, to f64 rounding), so a sphere stays a sphere of radius `s·r`.
-fn similarity_scale(linear: &DMat3) -> Option<f64> {
+pub(crate) fn similarity_scale(linear: &DMat3) -> Option<f64> {
     let cols = [linear.x_axis, linear.y_axis, linear.z_axis];
     let lengths = cols.map(|c| c.length());
     let scale = lengths[0];

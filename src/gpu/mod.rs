@@ -10,6 +10,7 @@
 pub mod binning;
 pub mod flatten;
 pub mod layout;
+pub mod precision;
 mod prepared;
 
 use crate::render::{Frame, RenderOptions, SphereTest, TriangleTest};
@@ -95,6 +96,8 @@ pub enum GpuError {
     TooLarge(String),
     #[error("reading the image back from the GPU failed: {0}")]
     Readback(String),
+    #[error("{0}; render it with --backend cpu")]
+    Precision(precision::PrecisionError),
 }
 
 /// The `override` constants a kernel is compiled with: only what the scene and the requested

@@ -57,6 +57,8 @@ impl<'a> PreparedScene<'a> {
         layout: PixelLayout,
     ) -> Result<PreparedScene<'a>, GpuError> {
         let start = std::time::Instant::now();
+        // Refused before any tile is handed out: `auto` then renders with the reference.
+        super::precision::check(scene, options).map_err(GpuError::Precision)?;
         let rays = crate::camera::PrimaryRays::for_camera(&scene.camera, options.width, options.height);
         let buffers = SceneBuffers::new(scene, &rays, &gpu.options);
         let flat = buffers.bins.is_none() && buffers.bvh.is_none();

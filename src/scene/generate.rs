@@ -110,7 +110,7 @@ pub fn icosphere(center: DVec3, radius: f64, subdivisions: u32) -> Mesh {
         "generated:icosphere(center {} {} {}, radius {}, {})",
         center.x, center.y, center.z, radius, subdivisions
     );
-    Mesh { path: PathBuf::from(path), positions, triangles }
+    Mesh { path: PathBuf::from(path), positions, triangles, vertex_locations: Vec::new() }
 }
 
 /// A flat grid of `nx × ny` cells in the plane `z = z`.
@@ -151,7 +151,7 @@ pub fn grid(x0: f64, y0: f64, dx: f64, dy: f64, nx: u32, ny: u32, z: f64) -> Mes
         }
     }
     let path = format!("generated:grid({x0}, {y0}, {dx}, {dy}, {nx}, {ny}, {z})");
-    Mesh { path: PathBuf::from(path), positions, triangles }
+    Mesh { path: PathBuf::from(path), positions, triangles, vertex_locations: Vec::new() }
 }
 
 /// Writes `mesh` as an OBJ file: a `#` comment naming `mesh.path`, then one

@@ -126,6 +126,10 @@ pub struct Material {
 pub struct Object {
     pub shape: Shape,
     pub location: Location,
+    /// Where a leaf's fields were written (their names), for later stages that reject a
+    /// value the parser accepted: `center`, `radius` of a Sphere; `normal`, `offset` of a
+    /// Plane; `vertex0`…`vertex2` of a Triangle. `Location::default()` (line 0) elsewhere.
+    pub fields: [Location; 3],
 }
 
 /// What a node is. Leaves carry the index of the material that was current when they
@@ -167,6 +171,9 @@ pub struct Mesh {
     pub positions: Vec<DVec3>,
     /// Triangles as indices into `positions` (fans already triangulated).
     pub triangles: Vec<[u32; 3]>,
+    /// Where each position was read in `path` (its `v`), so that later stages can point at
+    /// a vertex they reject; empty for generated meshes.
+    pub vertex_locations: Vec<Location>,
 }
 
 impl Mesh {
@@ -346,7 +353,7 @@ mod tests {
     use super::*;
 
     fn object(shape: Shape) -> Object {
-        Object { shape, location: Location::default() }
+        Object { shape, location: Location::default(), fields: Default::default() }
     }
 
     fn transform(matrix: DMat4, shape: Shape) -> Shape {
@@ -417,7 +424,12 @@ mod tests {
     fn mesh_bounds() {
         let positions =
             vec![DVec3::new(1.0, -2.0, 0.5), DVec3::new(-3.0, 4.0, 0.0), DVec3::new(0.0, 0.0, 7.0), DVec3::ZERO];
-        let mesh = Arc::new(Mesh { path: PathBuf::new(), positions, triangles: vec![[0, 1, 2], [0, 2, 3]] });
+        let mesh = Arc::new(Mesh {
+            path: PathBuf::new(),
+            positions,
+            triangles: vec![[0, 1, 2], [0, 2, 3]],
+            vertex_locations: Vec::new(),
+        });
         let expected = Bounds { min: DVec3::new(-3.0, -2.0, 0.0), max: DVec3::new(1.0, 4.0, 7.0) };
         assert_eq!(mesh.bounds(), expected);
         assert_eq!(bounded(Shape::Mesh { mesh: mesh.clone(), material: 0 }.bounds()), expected);

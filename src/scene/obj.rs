@@ -23,19 +23,31 @@ pub fn load_obj(path: &Path) -> Result<Mesh, SceneError> {
 
 /// Parses OBJ text; `path` is used in error messages and stored in the [`Mesh`].
 pub fn parse_obj(text: &str, path: &Path) -> Result<Mesh, SceneError> {
-    let mut reader = ObjReader { path, positions: Vec::new(), triangles: Vec::new(), forward_refs: Vec::new() };
+    let mut reader = ObjReader {
+        path,
+        positions: Vec::new(),
+        triangles: Vec::new(),
+        vertex_locations: Vec::new(),
+        forward_refs: Vec::new(),
+    };
     for (index, line) in text.split('\n').enumerate() {
         let line_number = u32::try_from(index + 1).unwrap_or(u32::MAX);
         reader.line(line_number, line)?;
     }
     reader.check_forward_refs()?;
-    Ok(Mesh { path: path.to_path_buf(), positions: reader.positions, triangles: reader.triangles })
+    Ok(Mesh {
+        path: path.to_path_buf(),
+        positions: reader.positions,
+        triangles: reader.triangles,
+        vertex_locations: reader.vertex_locations,
+    })
 }
 
 struct ObjReader<'p> {
     path: &'p Path,
     positions: Vec<DVec3>,
     triangles: Vec<[u32; 3]>,
+    vertex_locations: Vec<Location>,
     /// Positive indices beyond the vertices read so far, to check at the end of the file.
     forward_refs: Vec<(u64, Location)>,
 }
@@ -89,6 +101,7 @@ impl ObjReader<'_> {
             })?;
         }
         self.positions.push(DVec3::from_array(xyz));
+        self.vertex_locations.push(keyword.location);
         Ok(())
     }
 
@@ -175,6 +188,8 @@ mod tests {
             parse("# c\r\nv 0 0 0\r\nvn 0 0 1\nv 1 0 0 1\nv 1 1 0\nf 1/1/1 2//1 3/4 4\nf -1 -2 -3\nv 0 1 0\n").unwrap();
         assert_eq!(mesh.positions.len(), 4);
         assert_eq!(mesh.triangles, vec![[0, 1, 2], [0, 2, 3], [2, 1, 0]]);
+        let lines: Vec<_> = mesh.vertex_locations.iter().map(|l| (l.line, l.col)).collect();
+        assert_eq!(lines, vec![(2, 1), (4, 1), (5, 1), (8, 1)]);
     }
 
     #[test]

@@ -89,7 +89,7 @@ enum OpenBlock<'a> {
     Transform {
         keyword: Token<'a>,
         matrix: DMat4,
-        child: Option<Object>,
+        child: Option<Box<Object>>,
     },
 }
 
@@ -98,7 +98,7 @@ impl OpenBlock<'_> {
     fn adopt(&mut self, object: Object) {
         match self {
             OpenBlock::Group { children, .. } => children.push(object),
-            OpenBlock::Transform { child, .. } => *child = Some(object),
+            OpenBlock::Transform { child, .. } => *child = Some(Box::new(object)),
         }
     }
 }
@@ -610,7 +610,7 @@ impl<'a> Parser<'a> {
                     "}" => {
                         self.check_shortfall(count, token)?;
                         let shape = Shape::Group(std::mem::take(children));
-                        Ok(Item::Closed(Object { shape, location: keyword.location }))
+                        Ok(Item::Closed(Object { shape, location: keyword.location, fields: Default::default() }))
                     }
                     "MaterialIndex" => self.material_index().map(|()| Item::Consumed),
                     text if OBJECT_KEYWORDS.contains(&text) => {
@@ -623,8 +623,8 @@ impl<'a> Parser<'a> {
             OpenBlock::Transform { keyword, matrix, child } => {
                 if let Some(object) = child.take() {
                     self.punctuation("}", "`}` after the Transform's object")?;
-                    let shape = Shape::Transform { matrix: *matrix, child: Box::new(object) };
-                    return Ok(Item::Closed(Object { shape, location: keyword.location }));
+                    let shape = Shape::Transform { matrix: *matrix, child: object };
+                    return Ok(Item::Closed(Object { shape, location: keyword.location, fields: Default::default() }));
                 }
                 let token = self.expect(TRANSFORM_ITEMS)?;
                 if OBJECT_KEYWORDS.contains(&token.text) {
@@ -643,14 +643,15 @@ impl<'a> Parser<'a> {
     /// Sphere, Plane, Triangle or TriangleMesh.
     fn leaf(&mut self, keyword: Token<'a>) -> Result<Object> {
         let material = self.material_for(keyword)?;
+        let mut fields = [Location::default(); 3];
         let shape = match keyword.text {
-            "Sphere" => self.sphere(keyword, material)?,
-            "Plane" => self.plane(keyword, material)?,
-            "Triangle" => self.triangle(keyword, material)?,
+            "Sphere" => self.sphere(keyword, material, &mut fields)?,
+            "Plane" => self.plane(keyword, material, &mut fields)?,
+            "Triangle" => self.triangle(keyword, material, &mut fields)?,
             "TriangleMesh" => self.triangle_mesh(keyword, material)?,
             _ => return Err(self.unknown(keyword, "object", GROUP_ITEMS)),
         };
-        Ok(Object { shape, location: keyword.location })
+        Ok(Object { shape, location: keyword.location, fields })
     }
 
     fn material_for(&self, keyword: Token) -> Result<u32> {
@@ -674,9 +675,10 @@ impl<'a> Parser<'a> {
         Ok(())
     }
 
-    fn sphere(&mut self, keyword: Token<'a>, material: u32) -> Result<Shape> {
+    fn sphere(&mut self, keyword: Token<'a>, material: u32, at: &mut [Location; 3]) -> Result<Shape> {
         let (mut center, mut radius) = (None, None);
         let close = self.fields_block(keyword, &["center", "radius"], |p, field| {
+            at[usize::from(field.text != "center")] = field.location;
             match field.text {
                 "center" => center = Some(p.vec3()?.0),
                 _ => radius = Some(p.positive("radius")?),
@@ -690,9 +692,10 @@ impl<'a> Parser<'a> {
         })
     }
 
-    fn plane(&mut self, keyword: Token<'a>, material: u32) -> Result<Shape> {
+    fn plane(&mut self, keyword: Token<'a>, material: u32, at: &mut [Location; 3]) -> Result<Shape> {
         let (mut normal, mut offset) = (None, None);
         let close = self.fields_block(keyword, &["normal", "offset"], |p, field| {
+            at[usize::from(field.text != "normal")] = field.location;
             match field.text {
                 "normal" => normal = Some(p.nonzero_vec3("plane normal")?),
                 _ => offset = Some(p.number()?.0),
@@ -706,13 +709,14 @@ impl<'a> Parser<'a> {
         })
     }
 
-    fn triangle(&mut self, keyword: Token<'a>, material: u32) -> Result<Shape> {
+    fn triangle(&mut self, keyword: Token<'a>, material: u32, at: &mut [Location; 3]) -> Result<Shape> {
         const FIELDS: [&str; 3] = ["vertex0", "vertex1", "vertex2"];
         let mut vertices = [None; 3];
         let close = self.fields_block(keyword, &FIELDS, |p, field| {
-            let slot = FIELDS.iter().position(|f| *f == field.text).and_then(|i| vertices.get_mut(i));
-            if let Some(slot) = slot {
+            let index = FIELDS.iter().position(|f| *f == field.text);
+            if let Some((slot, place)) = index.and_then(|i| vertices.get_mut(i).zip(at.get_mut(i))) {
                 *slot = Some(p.vec3()?.0);
+                *place = field.location;
             }
             Ok(())
         })?;

@@ -1,0 +1,300 @@
+//! Single precision, stated and enforced: whether the f32 kernel can render a scene
+//! faithfully, decided on the host (in f64) before the scene is flattened.
+//!
+//! # The contract
+//!
+//! The kernel rounds every input to f32 and works on camera-relative values (the host moves
+//! the camera to the origin first, [`super::buffers`]). Rounding to f32 costs a relative
+//! 2⁻²⁴ per operation, which the accuracy tests measure; what it cannot absorb is leaving
+//! f32's range. A value beyond f32's largest (≈ 2¹²⁸), or a product the kernel forms that
+//! overflows, becomes infinity or NaN; one that underflows becomes subnormal or zero
+//! (WGSL allows flushing subnormals). Either gives wrong pixels without a word. So the
+//! host checks, per scene and per render, that every magnitude the kernel receives is
+//!
+//! ```text
+//! exactly 0, or within [2⁻²⁵, 2²⁸] ≈ [3.0e-8, 2.7e8]
+//! ```
+//!
+//! and otherwise refuses with the place of the offending value ([`check`]): the field as
+//! written (`radius`, `vertex1`, …), the innermost Transform when it is what scaled a
+//! radius out of range, the `v` line of a mesh vertex in its OBJ file, the camera block for
+//! its extent.
+//!
+//! The bound does not depend on the exact intersection formulas, only on their degree: the
+//! kernel forms products of at most four such values (degree ≤ 3 in coordinates for any
+//! ray/triangle test: determinants, edge functions, Cramer's rule, edge planes through the
+//! eye; degree 2 for spheres; for ellipsoids `a·Δ` multiplies two matrix entries by two
+//! unit-space coordinates), each factor a sum or difference of a few values, summed over a
+//! few terms.
+//!
+//! - Overflow: a factor is at most 4·2²⁸ (a difference of two values, doubled once more by
+//!   the watertight test's shear), so a product of four is below 2¹²⁰ and sums of up to
+//!   2⁷ of them stay below f32's largest value: no infinity, no NaN.
+//! - Underflow: a product of four values is at least 2⁻¹⁰⁰, whose rounding error 2⁻¹²⁴
+//!   is still above the smallest normal f32, 2⁻¹²⁶. Flushing a subnormal result (from
+//!   cancellation) to zero then changes nothing by more than rounding already does.
+//!
+//! The magnitudes checked, all camera-relative and after transforms: positions (sphere
+//! centres, triangle and mesh vertices) by their largest component, sphere radii, plane
+//! offsets (the plane's distance from the camera), the camera's extent (orthographic
+//! `size`, perspective `1/tan(angle/2)`) and, for a sphere under a non-uniform transform,
+//! its centre, its half-extents, the largest entry of the world-to-unit-sphere matrix and
+//! the camera's position in the unit sphere's space (the matrix's entries are about
+//! 1/size, so such a sphere must be between about 2⁻²⁸ and 2²⁵ large). A component far
+//! below the largest of its vector is absorbed by rounding in every sum it enters, so its
+//! own underflow does not matter; unit vectors (ray and light directions, plane normals,
+//! the camera basis) are normalised in f64 and always in range. Colours (light, ambient,
+//! diffuse, background) need only the upper bound: a colour product of up to three factors
+//! stays finite, and a colour factor small enough to underflow makes a term far below one
+//! 8-bit level.
+//!
+//! What this does not promise: relative precision. A sphere of radius 1 seen 2²⁸ units
+//! away is within range, but f32 cannot place its surface to better than 2⁴ units; the
+//! accuracy tests (`tests/hard_cases.rs`) measure how far that goes. It shows through very
+//! narrow perspective cameras (pixels off once `1/tan(angle/2)` times the longer image
+//! side exceeds about 2²², README "Single precision"), which this range check lets pass.
+
+use crate::camera::PrimaryRays;
+use crate::render::RenderOptions;
+use crate::scene::{Location, Mesh, Object, Scene, Shape};
+use glam::{DMat3, DMat4, DVec3};
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+/// The smallest non-zero magnitude the f32 kernel renders faithfully: 2⁻²⁵.
+pub const MIN_MAGNITUDE: f64 = 1.0 / 33_554_432.0;
+/// The largest magnitude the f32 kernel renders faithfully: 2²⁸.
+pub const MAX_MAGNITUDE: f64 = 268_435_456.0;
+
+/// A value the f32 kernel cannot render faithfully, and where it was written.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PrecisionError {
+    /// The file holding the value: the scene, or the OBJ file of a mesh vertex.
+    pub file: PathBuf,
+    /// Where in `file` (see the module's contract); `None` for values the scene model keeps
+    /// no place for (light, background and material colours).
+    pub location: Option<Location>,
+    /// What the value is, e.g. `Sphere radius`.
+    pub what: String,
+    /// Its magnitude, camera-relative and after transforms (NaN or infinite if f64 itself
+    /// overflowed computing it).
+    pub magnitude: f64,
+}
+
+impl fmt::Display for PrecisionError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}", self.file.display())?;
+        if let Some(Location { line, col }) = self.location {
+            write!(f, ":{line}:{col}")?;
+        }
+        write!(
+            f,
+            ": {}: magnitude {} is outside the range the GPU's f32 kernel renders faithfully \
+             (0 or 2^-25 to 2^28, with the camera at the origin)",
+            self.what,
+            show(self.magnitude)
+        )
+    }
+}
+
+impl std::error::Error for PrecisionError {}
+
+/// Whether the f32 kernel renders `scene` at `options` faithfully (see the module's
+/// contract); the first offending value in file order otherwise.
+pub fn check(scene: &Scene, options: &RenderOptions) -> Result<(), PrecisionError> {
+    let checker = Checker { scene: &scene.path };
+    {
+        let rays = PrimaryRays::for_camera(&scene.camera, options.width, options.height);
+        // Orthographic: `horizontal` is the basis vector times `size`; perspective: the
+        // direction is scaled by D = 1/tan(angle/2) and the extent is fixed (2).
+        let (what, extent) = if rays.orthographic {
+            ("OrthographicCamera size", rays.horizontal.length())
+        } else {
+            ("PerspectiveCamera 1/tan(angle/2)", rays.direction.length())
+        };
+        checker.scalar(Some(scene.camera.location), what, extent)?;
+    }
+    for (k, light) in scene.lights.iter().enumerate() {
+        checker.colour(&format!("DirectionalLight {} color", k + 1), light.color)?;
+    }
+    checker.colour("Background color", scene.background.color)?;
+    checker.colour("Background ambientLight", scene.background.ambient)?;
+    for (k, material) in scene.materials.iter().enumerate() {
+        checker.colour(&format!("Material {} diffuseColor", k), material.diffuse)?;
+    }
+    checker.objects(&scene.root, &DMat4::from_translation(-scene.camera.center), None)
+}
+
+struct Checker<'a> {
+    scene: &'a Path,
+}
+
+fn in_range(magnitude: f64) -> bool {
+    magnitude == 0.0 || (MIN_MAGNITUDE..=MAX_MAGNITUDE).contains(&magnitude)
+}
+
+/// The largest absolute component (NaN propagates, so that it is refused).
+fn max_norm(v: DVec3) -> f64 {
+    if v.is_nan() {
+        f64::NAN
+    } else {
+        v.abs().max_element()
+    }
+}
+
+impl Checker<'_> {
+    fn error(&self, location: Option<Location>, what: &str, magnitude: f64) -> PrecisionError {
+        PrecisionError { file: self.scene.to_path_buf(), location, what: what.to_string(), magnitude }
+    }
+
+    fn scalar(&self, location: Option<Location>, what: &str, value: f64) -> Result<(), PrecisionError> {
+        let magnitude = value.abs();
+        if in_range(magnitude) {
+            Ok(())
+        } else {
+            Err(self.error(location, what, magnitude))
+        }
+    }
+
+    fn vector(&self, location: Location, what: &str, v: DVec3) -> Result<(), PrecisionError> {
+        self.scalar(Some(location), what, max_norm(v))
+    }
+
+    fn colour(&self, what: &str, colour: DVec3) -> Result<(), PrecisionError> {
+        let magnitude = max_norm(colour);
+        if magnitude <= MAX_MAGNITUDE {
+            Ok(())
+        } else {
+            Err(self.error(None, what, magnitude))
+        }
+    }
+
+    /// `matrix` maps the current object space to camera-relative world space, as in
+    /// [`super::buffers`]; `transform` is the innermost enclosing Transform. The depth is
+    /// bounded by the parser's nesting limit.
+    fn objects(&self, objects: &[Object], matrix: &DMat4, transform: Option<Location>) -> Result<(), PrecisionError> {
+        for object in objects {
+            // A field's own place where the parser kept it, else the object's.
+            let field = |k: usize| Some(object.fields[k]).filter(|l| l.line != 0).unwrap_or(object.location);
+            match &object.shape {
+                Shape::Group(children) => self.objects(children, matrix, transform)?,
+                Shape::Transform { matrix: m, child } => {
+                    self.objects(std::slice::from_ref(child), &(*matrix * *m), Some(object.location))?
+                }
+                Shape::Sphere { center, radius, .. } => {
+                    // A radius fine in itself is made out of range by the transform around it.
+                    let scaled_by = if in_range(*radius) { transform.unwrap_or(field(1)) } else { field(1) };
+                    self.sphere([field(0), field(1), scaled_by], matrix, *center, *radius)?
+                }
+                Shape::Plane { normal, offset, .. } => {
+                    let n = normal.normalize();
+                    let world_normal = DMat3::from_mat4(*matrix).inverse().transpose().mul_vec3(n).normalize();
+                    self.vector(field(0), "Plane normal", world_normal)?;
+                    let offset = world_normal.dot(matrix.transform_point3(*offset * n));
+                    self.scalar(Some(field(1)), "Plane offset from the camera", offset)?;
+                }
+                Shape::Triangle { vertices, .. } => {
+                    for (k, v) in vertices.iter().enumerate() {
+                        self.vector(field(k), &format!("Triangle vertex{k}"), matrix.transform_point3(*v))?;
+                    }
+                }
+                Shape::Mesh { mesh, .. } => self.mesh(object.location, matrix, mesh)?,
+            }
+        }
+        Ok(())
+    }
+
+    /// The same cases as the flattening: a sphere under a similarity stays a sphere, any
+    /// other keeps the matrix to the unit sphere's space. `at`: where the centre and the
+    /// radius were written, and what scaled the radius (the radius itself or a Transform).
+    fn sphere(&self, at: [Location; 3], matrix: &DMat4, center: DVec3, radius: f64) -> Result<(), PrecisionError> {
+        let [center_at, radius_at, scaled_at] = at;
+        let linear = DMat3::from_mat4(*matrix);
+        if let Some(scale) = super::flatten::similarity_scale(&linear) {
+            self.vector(center_at, "Sphere center", matrix.transform_point3(center))?;
+            let at = if scale == 1.0 { radius_at } else { scaled_at };
+            return self.scalar(Some(at), "Sphere radius", radius * scale);
+        }
+        let to_world = *matrix * DMat4::from_translation(center) * DMat4::from_scale(DVec3::splat(radius));
+        let to_unit = to_world.inverse();
+        self.vector(center_at, "transformed Sphere center", to_world.w_axis.truncate())?;
+        let half = DVec3::from_array([0, 1, 2].map(|r| to_world.row(r).truncate().length()));
+        self.vector(scaled_at, "transformed Sphere half-extent", half)?;
+        let entries = DMat3::from_mat4(to_unit).to_cols_array();
+        let largest = entries.iter().try_fold(0.0_f64, |m, e| (!e.is_nan()).then(|| m.max(e.abs())));
+        self.scalar(Some(scaled_at), "transformed Sphere inverse-matrix entry", largest.unwrap_or(f64::NAN))?;
+        // The camera is the origin: its place in the unit sphere's space is to_unit · 0.
+        let camera = to_unit.w_axis.truncate();
+        self.vector(scaled_at, "camera position in the transformed Sphere's unit space", camera)
+    }
+
+    /// Every vertex a triangle uses (an unused one never reaches the kernel), first in file
+    /// order, located in the OBJ file where the mesh knows its lines.
+    fn mesh(&self, at: Location, matrix: &DMat4, mesh: &Mesh) -> Result<(), PrecisionError> {
+        let mut used = vec![false; mesh.positions.len()];
+        for &index in mesh.triangles.iter().flatten() {
+            if let Some(u) = used.get_mut(index as usize) {
+                *u = true;
+            }
+        }
+        let vertices = mesh.positions.iter().zip(&used).enumerate().filter(|(_, (_, used))| **used);
+        for (k, (position, _)) in vertices {
+            let magnitude = max_norm(matrix.transform_point3(*position));
+            if in_range(magnitude) {
+                continue;
+            }
+            return Err(match mesh.vertex_locations.get(k) {
+                Some(&location) => PrecisionError {
+                    file: mesh.path.clone(),
+                    location: Some(location),
+                    what: format!("mesh vertex {}", k + 1),
+                    magnitude,
+                },
+                None => self.error(
+                    Some(at),
+                    &format!("TriangleMesh vertex {} of {}", k + 1, mesh.path.display()),
+                    magnitude,
+                ),
+            });
+        }
+        Ok(())
+    }
+}
+
+/// A magnitude in short scientific notation: `1e39`, `2.684e8`.
+fn show(value: f64) -> String {
+    let text = format!("{value:.3e}");
+    match text.split_once('e') {
+        Some((mantissa, exponent)) if mantissa.contains('.') => {
+            format!("{}e{exponent}", mantissa.trim_end_matches('0').trim_end_matches('.'))
+        }
+        _ => text,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_bounds_are_the_stated_powers_of_two() {
+        assert_eq!(MIN_MAGNITUDE, 2f64.powi(-25));
+        assert_eq!(MAX_MAGNITUDE, 2f64.powi(28));
+        // The overflow argument: four factors of at most 4·2²⁸, times 2⁷ terms, fit in f32.
+        assert!((4.0 * MAX_MAGNITUDE).powi(4) * 128.0 < f32::MAX as f64);
+        // The underflow argument: the rounding error of a product of four is a normal f32.
+        assert!(MIN_MAGNITUDE.powi(4) * 2f64.powi(-24) >= f32::MIN_POSITIVE as f64);
+    }
+
+    #[test]
+    fn range_and_formatting() {
+        assert!(in_range(0.0) && in_range(MIN_MAGNITUDE) && in_range(MAX_MAGNITUDE) && in_range(1.0));
+        assert!(!in_range(MIN_MAGNITUDE / 2.0) && !in_range(MAX_MAGNITUDE * 2.0));
+        assert!(!in_range(f64::NAN) && !in_range(f64::INFINITY));
+        assert!(max_norm(DVec3::new(1.0, f64::NAN, 0.0)).is_nan());
+        assert_eq!(show(1e39), "1e39");
+        assert_eq!(show(MAX_MAGNITUDE), "2.684e8");
+        assert_eq!(show(MIN_MAGNITUDE / 2.0), "1.49e-8");
+        assert_eq!(show(f64::INFINITY), "inf");
+    }
+}

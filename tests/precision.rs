@@ -1,0 +1,378 @@
+//! Single precision, stated and enforced (`raycaster::gpu::precision`): each kind of value
+//! the f32 kernel receives, just inside and just outside its range [2⁻²⁵, 2²⁸]. Inside, the
+//! GPU's images must equal the f64 reference's (no pixel more than 1 level off where both
+//! agree on the hit, hit/miss disagreements within the 0.1% contract); outside, the GPU
+//! refuses, naming the file, line and column of the value. The command line's `--backend
+//! gpu` then fails and `auto` falls back to the reference with a notice.
+
+mod common;
+
+use raycaster::gpu::{precision, GpuError};
+use raycaster::image_io::{color_image, depth_image, normals_image};
+use raycaster::metrics::{compare_frames, depth_range_of, image_diff};
+use raycaster::render::RenderOptions;
+use raycaster::scene::{load_scene, Location};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+const SIZE: u32 = 48;
+
+fn p(exponent: i32) -> f64 {
+    2f64.powi(exponent)
+}
+
+/// A number as the scene parser reads it back exactly (shortest round-trip form).
+fn n(v: f64) -> String {
+    format!("{v:e}")
+}
+
+fn ortho(size: f64) -> String {
+    format!("OrthographicCamera {{ center 0 0 0 direction 0 0 -1 up 0 1 0 size {} }}", n(size))
+}
+
+fn perspective(center_z: f64, direction: &str, degrees: &str) -> String {
+    format!("PerspectiveCamera {{ center 0 0 {} direction {direction} up 0 1 0 angle {degrees} }}", n(center_z))
+}
+
+/// The camera on line 1, the object on line 8 from column 5.
+fn scene_text(camera: &str, object: &str) -> String {
+    format!(
+        "{camera}\n\
+         Lights {{ numLights 1 DirectionalLight {{ direction -0.5 -0.3 -1 color 0.9 0.9 0.9 }} }}\n\
+         Background {{ color 0.1 0.2 0.3 ambientLight 0.1 0.1 0.1 }}\n\
+         Materials {{ numMaterials 1 Material {{ diffuseColor 0.8 0.6 0.4 }} }}\n\
+         Group {{\n\
+         \x20   numObjects 1\n\
+         \x20   MaterialIndex 0\n\
+         \x20   {object}\n\
+         }}\n"
+    )
+}
+
+const OBJECT_LINE: u32 = 8;
+
+/// A triangle whose first vertex is the farthest from the camera (largest component `m`)
+/// and the others less than half as far, facing the camera. The coefficients are not
+/// dyadic, so that no edge runs through pixel centres (where rounding alone decides).
+fn far_triangle(m: f64) -> [[f64; 3]; 3] {
+    [[-m, -0.11 * m, -0.27 * m], [0.23 * m, -0.13 * m, -0.12 * m], [0.03 * m, 0.19 * m, -0.21 * m]]
+}
+
+/// A triangle whose first vertex is the nearest to the camera (largest component `m`) and
+/// the others at least twice as far, facing the camera.
+fn near_triangle(m: f64) -> [[f64; 3]; 3] {
+    [[0.1 * m, 0.05 * m, -m], [3.1 * m, 0.3 * m, -2.0 * m], [0.2 * m, 2.9 * m, -2.1 * m]]
+}
+
+fn triangle(v: [[f64; 3]; 3]) -> String {
+    let s = |k: usize| v[k].map(n).join(" ");
+    format!("Triangle {{ vertex0 {} vertex1 {} vertex2 {} }}", s(0), s(1), s(2))
+}
+
+/// Two comment lines first, so the first vertex is at line 3, column 3.
+fn obj(v: [[f64; 3]; 3]) -> String {
+    let s = |k: usize| v[k].map(n).join(" ");
+    format!("# precision test\n\n  v {}\nv {}\nv {}\nf 1 2 3\n", s(0), s(1), s(2))
+}
+
+const MESH: &str = "TriangleMesh { obj_file mesh.obj }";
+
+enum Expect {
+    /// The GPU renders it like the reference, and something is visible.
+    Faithful,
+    /// The GPU renders it like the reference, and nothing is visible.
+    Empty,
+    /// Refused: the file (scene or mesh), the line, the word on it where the column must
+    /// point, and the start of the description.
+    Refused { file: &'static str, line: u32, word: &'static str, what: &'static str },
+}
+
+struct Case {
+    name: String,
+    scene: String,
+    obj: Option<String>,
+    expect: Expect,
+}
+
+/// Refused at `word` on the object's line.
+fn refused_at(word: &'static str, what: &'static str) -> Expect {
+    Expect::Refused { file: "scene.txt", line: OBJECT_LINE, word, what }
+}
+
+fn cases() -> Vec<Case> {
+    let mut cases = Vec::new();
+    let mut add =
+        |name: &str, inside: f64, outside: f64, expect: Expect, make: &dyn Fn(f64) -> (String, Option<String>)| {
+            for (m, expect) in [(inside, Expect::Faithful), (outside, expect)] {
+                let (scene, obj) = make(m);
+                cases.push(Case { name: format!("{name} {}", n(m)), scene, obj, expect });
+            }
+        };
+    let (hi, hi_out, lo, lo_out) = (p(28), p(29), p(-25), p(-26));
+    let sphere = |c: [f64; 3], r: f64| format!("Sphere {{ center {} radius {} }}", c.map(n).join(" "), n(r));
+
+    add("sphere radius, large", hi, hi_out, refused_at("radius", "Sphere radius"), &|m| {
+        (scene_text(&ortho(m / 2.0), &sphere([0.0; 3], m)), None)
+    });
+    add("sphere radius, small", lo, lo_out, refused_at("radius", "Sphere radius"), &|m| {
+        (scene_text(&ortho(4.0 * m), &sphere([0.0, 0.0, -2.0 * m], m)), None)
+    });
+    add("sphere centre, far", hi, hi_out, refused_at("center", "Sphere center"), &|m| {
+        (scene_text(&ortho(m / 2.0), &sphere([0.0, 0.0, -m], m / 4.0)), None)
+    });
+    add("sphere centre, near", lo, lo_out, refused_at("center", "Sphere center"), &|m| {
+        (scene_text(&ortho(8.0 * m), &sphere([m, 0.0, 0.0], 2.0 * m)), None)
+    });
+    add("triangle vertex, far", hi, hi_out, refused_at("vertex0", "Triangle vertex0"), &|m| {
+        (scene_text(&ortho(m / 2.0), &triangle(far_triangle(m))), None)
+    });
+    add("triangle vertex, near", lo, lo_out, refused_at("vertex0", "Triangle vertex0"), &|m| {
+        (scene_text(&ortho(8.0 * m), &triangle(near_triangle(m))), None)
+    });
+    let vertex = || Expect::Refused { file: "mesh.obj", line: 3, word: "v", what: "mesh vertex 1" };
+    add("OBJ vertex, far", hi, hi_out, vertex(), &|m| (scene_text(&ortho(m / 2.0), MESH), Some(obj(far_triangle(m)))));
+    add("OBJ vertex, near", lo, lo_out, vertex(), &|m| {
+        (scene_text(&ortho(8.0 * m), MESH), Some(obj(near_triangle(m))))
+    });
+    let plane = |m: f64| format!("Plane {{ normal 0 1 0 offset {} }}", n(-m));
+    let looking_down = |m: f64| (scene_text(&perspective(0.0, "0 -0.5 -1", "60"), &plane(m)), None);
+    add("plane offset, far", hi, hi_out, refused_at("offset", "Plane offset"), &looking_down);
+    add("plane offset, near", lo, lo_out, refused_at("offset", "Plane offset"), &looking_down);
+    // Scale 1 1 e: the matrix to the unit sphere's space has the entry 1/e.
+    let squashed = |e: f64| format!("Transform {{ Scale 1 1 {} {} }}", n(e), sphere([0.0; 3], 1.0));
+    // A radius fine in itself, scaled out of range: the Transform is to blame.
+    let in_transform = |what| refused_at("Transform", what);
+    add("transform entry (1/scale), large", p(-28), p(-29), in_transform("transformed Sphere inverse-matrix"), &|e| {
+        (scene_text(&ortho(4.0), &squashed(e)), None)
+    });
+    // Scale m m m/2: not a similarity, so the sphere keeps its matrix, whose entries are
+    // about 1/m: a sphere that keeps a matrix may be at most 2^25 large.
+    let stretched =
+        |m: f64| format!("Transform {{ Scale {} {} {} {} }}", n(m), n(m), n(m / 2.0), sphere([0.0; 3], 1.0));
+    add("transform scale, large", p(26), p(27), in_transform("transformed Sphere inverse-matrix"), &|m| {
+        (scene_text(&ortho(m / 2.0), &stretched(m)), None)
+    });
+    // Scale 1 1 256 on a sphere of radius m/256: it reaches m along z, with matrix entries
+    // of 256/m and 1/m.
+    let long = |m: f64| format!("Transform {{ Scale 1 1 256 {} }}", sphere([0.0; 3], m / 256.0));
+    add("transformed sphere extent, large", hi, hi_out, in_transform("transformed Sphere half-extent"), &|m| {
+        (scene_text(&ortho(m / 64.0), &long(m)), None)
+    });
+    let enlarged = |s: f64| format!("Transform {{ UniformScale {} {} }}", n(s), sphere([0.0; 3], p(26)));
+    add("uniform scale, large", 4.0, 8.0, in_transform("Sphere radius"), &|s| {
+        (scene_text(&ortho(p(27)), &enlarged(s)), None)
+    });
+    add("camera far away", hi, hi_out, refused_at("center", "Sphere center"), &|m| {
+        (scene_text(&perspective(m, "0 0 -1", "30"), &sphere([0.0; 3], m / 4.0)), None)
+    });
+    let camera =
+        || Expect::Refused { file: "scene.txt", line: 1, word: "OrthographicCamera", what: "OrthographicCamera size" };
+    add("orthographic size, large", hi, hi_out, camera(), &|m| {
+        (scene_text(&ortho(m), &sphere([0.0; 3], m / 4.0)), None)
+    });
+    add("orthographic size, small", lo, lo_out, camera(), &|m| {
+        (scene_text(&ortho(m), &sphere([2.0 * m, 0.0, -4.0 * m], 2.0 * m)), None)
+    });
+
+    // Exactly zero is in range: the camera on the plane sees it edge-on, in both backends.
+    cases.push(Case {
+        name: "plane through the camera".into(),
+        scene: scene_text(&perspective(0.0, "0 -0.5 -1", "60"), &plane(0.0)),
+        obj: None,
+        expect: Expect::Empty,
+    });
+    // The issue's examples: values beyond f32 altogether.
+    cases.push(Case {
+        name: "sphere radius 1e39".into(),
+        scene: scene_text(&ortho(4.0), "Sphere { center 0 0 -5 radius 1e39 }"),
+        obj: None,
+        expect: refused_at("radius", "Sphere radius"),
+    });
+    cases.push(Case {
+        name: "OBJ vertex 1e39".into(),
+        scene: scene_text(&ortho(4.0), MESH),
+        obj: Some("# precision test\n\n  v 0 1e39 -1\nv 1 0 -1\nv 0 1 -1\nf 1 2 3\n".into()),
+        expect: Expect::Refused { file: "mesh.obj", line: 3, word: "v", what: "mesh vertex 1" },
+    });
+    // A perspective camera's extent is 1/tan(angle/2): 1.1e9 for 1e-7 degrees.
+    cases.push(Case {
+        name: "perspective angle 1e-7 degrees".into(),
+        scene: scene_text(&perspective(4.0, "0 0 -1", "1e-7"), &sphere([0.0; 3], 1.0)),
+        obj: None,
+        expect: Expect::Refused {
+            file: "scene.txt",
+            line: 1,
+            word: "PerspectiveCamera",
+            what: "PerspectiveCamera 1/tan(angle/2)",
+        },
+    });
+    cases
+}
+
+fn write_case(dir: &Path, case: &Case) -> PathBuf {
+    let path = dir.join("scene.txt");
+    std::fs::write(&path, &case.scene).unwrap();
+    if let Some(obj) = &case.obj {
+        std::fs::write(dir.join("mesh.obj"), obj).unwrap();
+    }
+    path
+}
+
+#[test]
+fn each_value_just_inside_renders_like_the_reference_and_just_outside_is_refused_where_written() {
+    let options = RenderOptions::all(SIZE, SIZE);
+    let gpu = common::gpu();
+    let mut report = Vec::new();
+    let mut failures = Vec::new();
+    for case in cases() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = write_case(dir.path(), &case);
+        let scene = load_scene(&path).unwrap_or_else(|e| panic!("{}: {e}", case.name));
+        let checked = precision::check(&scene, &options);
+        match case.expect {
+            Expect::Refused { file, line, word, what } => {
+                let text = if file == "mesh.obj" { case.obj.as_deref().unwrap() } else { &case.scene };
+                let text_line = text.lines().nth(line as usize - 1).unwrap();
+                let col = text_line.find(&format!("{word} ")).unwrap() as u32 + 1;
+                let Err(e) = checked else {
+                    failures.push(format!("{}: accepted, expected refused", case.name));
+                    continue;
+                };
+                report.push(format!("{:<40} refused: {e}", case.name));
+                assert_eq!(e.file, dir.path().join(file), "{}", case.name);
+                assert_eq!(e.location, Some(Location { line, col }), "{}", case.name);
+                assert!(e.what.starts_with(what), "{}: {e}", case.name);
+                let prefix = format!("{}:{line}:{col}: {what}", dir.path().join(file).display());
+                assert!(e.to_string().starts_with(&prefix), "{}: {e}", case.name);
+                if let Some(gpu) = gpu {
+                    match gpu.render(&scene, &options) {
+                        Err(GpuError::Precision(g)) => {
+                            assert_eq!(g, e);
+                            assert!(GpuError::Precision(g).to_string().ends_with("; render it with --backend cpu"));
+                        }
+                        other => failures.push(format!("{}: the GPU rendered it: {:?}", case.name, other.err())),
+                    }
+                }
+            }
+            Expect::Faithful | Expect::Empty => {
+                let must_hit = matches!(case.expect, Expect::Faithful);
+                if let Err(e) = checked {
+                    failures.push(format!("{}: refused, expected rendered: {e}", case.name));
+                    continue;
+                }
+                let Some(gpu) = gpu else { continue };
+                let ours = gpu.render(&scene, &options).unwrap_or_else(|e| panic!("{}: {e}", case.name));
+                let reference = raycaster::cpu::render(&scene, &options);
+                let (lo, hi) = depth_range_of(&reference);
+                let diffs = [
+                    image_diff(&color_image(&ours), &color_image(&reference)),
+                    image_diff(&normals_image(&ours), &normals_image(&reference)),
+                    image_diff(&depth_image(&ours, lo, hi), &depth_image(&reference, lo, hi)),
+                ];
+                let errors = compare_frames(&ours, &reference, (lo, hi));
+                let mismatches = errors[0].hit_mismatches;
+                let non_finite: usize = errors.iter().map(|e| e.non_finite).sum();
+                let off = diffs.map(|d| d.off_by_more_than_one);
+                let hits = reference.hit.iter().filter(|h| **h).count();
+                report.push(format!(
+                    "{:<40} rendered: {hits} hits, >1 level (colour, normals, depth) {off:?}, hit/miss {mismatches}",
+                    case.name
+                ));
+                // Pixels more than a level off only where the hit itself differs, and
+                // those within the 0.1% contract.
+                let allowed = reference.hit.len() / 1000;
+                if off.iter().any(|&o| o > mismatches)
+                    || mismatches > allowed
+                    || non_finite > 0
+                    || must_hit != (hits > 0)
+                {
+                    failures.push(format!(
+                        "{}: {off:?} pixels off by >1, {mismatches} hit/miss (≤ {allowed}), {non_finite} NaN/inf, {hits} hits",
+                        case.name
+                    ));
+                }
+            }
+        }
+    }
+    println!("{}", report.join("\n"));
+    assert!(failures.is_empty(), "{failures:#?}");
+}
+
+/// No scene of ours or of the course is refused: the bound costs them nothing.
+#[test]
+fn every_project_and_course_scene_is_in_range() {
+    let mut files = Vec::new();
+    let mut dirs = vec![common::scenes_dir(), common::scenes_dir().join("hard")];
+    dirs.extend(common::corpus().map(|c| c.join("a2")));
+    for dir in dirs {
+        for entry in std::fs::read_dir(&dir).unwrap_or_else(|e| panic!("{}: {e}", dir.display())) {
+            let path = entry.unwrap().path();
+            if path.extension().is_some_and(|x| x == "txt") && !path.ends_with("README.txt") {
+                files.push(path);
+            }
+        }
+    }
+    let mut checked = 0;
+    for path in &files {
+        // Some hard cases are load errors on purpose (a singular transform).
+        let Ok(scene) = load_scene(path) else { continue };
+        for (w, h) in [(200, 200), (16384, 16384), (1, 1)] {
+            precision::check(&scene, &RenderOptions::all(w, h)).unwrap_or_else(|e| panic!("{e}"));
+        }
+        checked += 1;
+    }
+    assert!(checked >= 40, "only {checked} scenes checked");
+}
+
+fn raycaster(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_raycaster")).args(args).output().unwrap()
+}
+
+/// `--backend gpu` refuses with the located one-line error and exit status 1, writing
+/// nothing; `auto` renders with the reference, says so in one line, exits 0, and writes
+/// the very image `--backend cpu` writes.
+#[test]
+fn the_command_line_refuses_on_gpu_and_falls_back_on_auto() {
+    if common::gpu().is_none() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let case = Case {
+        name: String::new(),
+        scene: scene_text(&ortho(4.0), MESH),
+        obj: Some("# precision test\n\n  v 0 1e39 -1\nv 1 0 -1\nv 0 1 -1\nf 1 2 3\n".into()),
+        expect: Expect::Faithful,
+    };
+    let scene = write_case(dir.path(), &case);
+    let scene = scene.to_str().unwrap();
+    let out = |name: &str| dir.path().join(name).to_str().unwrap().to_string();
+    let run = |backend: &str, image: &str| {
+        raycaster(&["-input", scene, "-size", "16", "16", "-output", image, "--backend", backend])
+    };
+
+    let gpu = run("gpu", &out("gpu.tga"));
+    let stderr = String::from_utf8_lossy(&gpu.stderr);
+    let mesh = dir.path().join("mesh.obj");
+    assert_eq!(gpu.status.code(), Some(1), "{stderr}");
+    assert_eq!(
+        stderr.trim_end(),
+        format!(
+            "raycaster: {}:3:3: mesh vertex 1: magnitude 1e39 is outside the range the GPU's f32 kernel \
+             renders faithfully (0 or 2^-25 to 2^28, with the camera at the origin); render it with --backend cpu",
+            mesh.display()
+        )
+    );
+    assert!(!Path::new(&out("gpu.tga")).exists());
+
+    let auto = run("auto", &out("auto.tga"));
+    let stderr = String::from_utf8_lossy(&auto.stderr);
+    assert_eq!(auto.status.code(), Some(0), "{stderr}");
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    assert!(stderr.contains(&format!("{}:3:3: mesh vertex 1: magnitude 1e39", mesh.display())), "{stderr}");
+    assert!(stderr.trim_end().ends_with("; rendering with the f64 CPU reference instead"), "{stderr}");
+
+    let cpu = run("cpu", &out("cpu.tga"));
+    assert_eq!(cpu.status.code(), Some(0));
+    assert!(cpu.stderr.is_empty());
+    assert_eq!(std::fs::read(out("auto.tga")).unwrap(), std::fs::read(out("cpu.tga")).unwrap());
+}
