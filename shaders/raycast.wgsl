@@ -40,13 +40,16 @@ const SPHERE_PRECISE: u32 = 1u;
 // (gpu::binning); else flat loops over each kind.
 override USE_BVH: bool = false;
 override USE_BINS: bool = false;
-// Each invocation renders PACKET pixels stacked in a column (image rows PACKET·m …). With
-// bins PACKET is 4, so that every primitive loaded from a bin is tested against four rays:
-// on lavapipe a load whose address is the same for every lane still costs a gather per lane
-// group, and the packet pays it once for four pixels. Without bins it is 1: lavapipe stops
-// any invocation's loops after 65535 iterations in all (docs/lavapipe.md), which four flat
-// walks over many primitives would reach. (The host's gpu::KernelConfig::packet.)
-override PACKET: u32 = 1u;
+// With bins (entry point main_bins) each invocation renders PACKET pixels stacked in a
+// column (image rows PACKET·m …), so that every primitive loaded from a bin is tested
+// against four rays: on lavapipe a load whose address is the same for every lane still
+// costs a gather per lane group, and the packet pays it once for four pixels. Without bins
+// (entry point main) an invocation renders one pixel: lavapipe stops any invocation's loops
+// after 65535 iterations in all (docs/lavapipe.md), which four flat walks over many
+// primitives would reach. Two entry points, not an override: wgpu compiles only what the
+// chosen one reaches, and lavapipe would otherwise compile the other's code before dropping
+// it. (The host's gpu::KernelConfig::packet.)
+const PACKET: u32 = 4u;
 
 const F32_MAX: f32 = 3.40282347e38;
 // The "no hit" distance: never less than any closest-so-far.
@@ -808,23 +811,29 @@ fn ray_of_row(i: u32, image_row: u32) -> Ray {
     return primary_ray(i, P.height - 1u - clamped);
 }
 
+// One invocation per pixel, without bins.
+@compute @workgroup_size(8, 8)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    P = params;
+    let i = id.x;
+    let row = id.y;
+    if (i >= P.width || row >= P.tile_rows) {
+        return;
+    }
+    let ray = ray_of_row(i, P.first_row + row);
+    finish_pixel(i, i32(row), ray, closest_hit(ray));
+}
+
 // One invocation per column and packet: image rows base + PACKET·y … + PACKET − 1, where base
 // is the tile's first row rounded down to a multiple of PACKET, so that a packet never
 // straddles two bins (8 rows, a multiple of PACKET) whatever the tile.
 @compute @workgroup_size(8, 8)
-fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+fn main_bins(@builtin(global_invocation_id) id: vec3<u32>) {
     P = params;
     let i = id.x;
     let base = P.first_row - P.first_row % PACKET + id.y * PACKET;
     let first = i32(base) - i32(P.first_row);
     if (i >= P.width || first >= i32(P.tile_rows)) {
-        return;
-    }
-    if (!USE_BINS) {
-        for (var p = 0u; p < PACKET; p++) {
-            let ray = ray_of_row(i, base + p);
-            finish_pixel(i, first + i32(p), ray, closest_hit(ray));
-        }
         return;
     }
     R0 = ray_of_row(i, base);

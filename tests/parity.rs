@@ -35,10 +35,13 @@ fn size_for(path: &Path) -> (u32, u32) {
 }
 
 fn parity(files: &[PathBuf]) {
-    let Some(gpu) = common::gpu() else { return };
+    if common::gpu().is_none() {
+        return;
+    }
+    let renderers: Vec<_> = common::ACCELERATIONS.iter().map(|&a| (a, common::gpu_with(a).unwrap())).collect();
     let mut report = vec![format!(
-        "{:<44} {:>9} {:>7} {:>9} {:>7} {:>9} {:>7}",
-        "scene (shade_back)", "colour>1", "max", "normal>1", "max", "depth>1", "max"
+        "{:<58} {:>9} {:>7} {:>9} {:>7} {:>9} {:>7}",
+        "scene (shade_back, candidates from)", "colour>1", "max", "normal>1", "max", "depth>1", "max"
     )];
     let mut failures = Vec::new();
     for path in files {
@@ -47,20 +50,23 @@ fn parity(files: &[PathBuf]) {
         for shade_back in [false, true] {
             let options = RenderOptions { shade_back, ..RenderOptions::all(width, height) };
             let reference = raycaster::cpu::render(&scene, &options);
-            let ours = gpu.render(&scene, &options).unwrap();
-            let (min, max) = raycaster::metrics::depth_range_of(&reference);
-            // Colour, normals and depth, in that order.
-            let diffs: Vec<_> = compare_frames(&ours, &reference, (min, max)).iter().map(|e| e.image).collect();
-            let name = format!("{} ({shade_back})", path.file_name().unwrap().to_string_lossy());
-            let cells: Vec<String> =
-                diffs.iter().map(|d| format!("{:>9} {:>7}", d.off_by_more_than_one, d.max)).collect();
-            report.push(format!("{name:<44} {}", cells.join(" ")));
-            for (d, what) in diffs.iter().zip(["colour", "normals", "depth"]) {
-                if ((d.pixels - d.off_by_more_than_one) as f64) < MIN_AGREEING_FRACTION * d.pixels as f64 {
-                    failures.push(format!(
-                        "{name} {what}: {} of {} pixels off by more than 1",
-                        d.off_by_more_than_one, d.pixels
-                    ));
+            for (acceleration, gpu) in &renderers {
+                let ours = gpu.render(&scene, &options).unwrap();
+                let (min, max) = raycaster::metrics::depth_range_of(&reference);
+                // Colour, normals and depth, in that order.
+                let diffs: Vec<_> = compare_frames(&ours, &reference, (min, max)).iter().map(|e| e.image).collect();
+                let name =
+                    format!("{} ({shade_back}, {})", path.file_name().unwrap().to_string_lossy(), acceleration.name());
+                let cells: Vec<String> =
+                    diffs.iter().map(|d| format!("{:>9} {:>7}", d.off_by_more_than_one, d.max)).collect();
+                report.push(format!("{name:<58} {}", cells.join(" ")));
+                for (d, what) in diffs.iter().zip(["colour", "normals", "depth"]) {
+                    if ((d.pixels - d.off_by_more_than_one) as f64) < MIN_AGREEING_FRACTION * d.pixels as f64 {
+                        failures.push(format!(
+                            "{name} {what}: {} of {} pixels off by more than 1",
+                            d.off_by_more_than_one, d.pixels
+                        ));
+                    }
                 }
             }
         }

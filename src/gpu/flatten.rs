@@ -44,6 +44,12 @@ pub struct SceneBuffers {
 /// 24: 2.4 / 3.6, 48: 2.8 / 6.6, bunny_1k 4.1 / 127.
 pub const BVH_MIN_PRIMITIVES: usize = 8;
 
+/// Below this many pixels `auto` skips the bins: their kernel takes about 20 ms longer to
+/// compile on lavapipe (47 against 26 ms for the hierarchy's, per process, shader cache warm),
+/// more than bins save at such sizes (bunny_1k at 200²: 1.4 against 4.4 ms of kernel time),
+/// while from 512² on they win (bunny_40k: 50 against 85 ms).
+pub const BINS_MIN_PIXELS: u64 = 1 << 18;
+
 /// Bins are used while a bin lists at most this many primitives on average (see
 /// [`Bins::mean_list_length`]); longer lists, as sub-pixel triangles make, go to the
 /// hierarchy.
@@ -121,10 +127,12 @@ impl SceneBuffers {
     /// [`Acceleration::Auto`] the cost model's choice.
     fn choose_acceleration(&mut self, rays: &PrimaryRays, options: &GpuOptions) {
         let finite = self.triangles.len() + self.spheres.len() + self.ellipsoids.len();
-        if finite == 0 || options.acceleration == Acceleration::Flat {
+        let auto = options.acceleration == Acceleration::Auto;
+        if finite == 0 || options.acceleration == Acceleration::Flat || (auto && finite < options.bvh_min_primitives) {
             return;
         }
-        if matches!(options.acceleration, Acceleration::Auto | Acceleration::Bins) {
+        let pixels = rays.width as u64 * rays.height as u64;
+        if options.acceleration == Acceleration::Bins || (auto && pixels >= BINS_MIN_PIXELS) {
             let candidates = binning::candidates(&self.triangles, &self.sphere_bounds, &self.ellipsoid_bounds);
             let bins = Bins::build(rays, &self.triangles, &candidates);
             let short = bins.mean_list_length() <= BINS_MAX_MEAN_LIST && bins.max_list_length() <= LOOP_LIMIT / 2;

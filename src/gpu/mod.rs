@@ -137,8 +137,8 @@ impl KernelConfig {
     }
 
     /// The values for `PipelineCompilationOptions::constants`.
-    /// Pixels each invocation renders, stacked in a column (the kernel's `PACKET`): 4 rays
-    /// share each load from a bin; other kernels render one pixel per invocation.
+    /// Pixels each invocation renders, stacked in a column (the kernel's `PACKET` in
+    /// `main_bins`): 4 rays share each load from a bin; `main` renders one pixel.
     pub fn packet(&self) -> u32 {
         if self.use_bins {
             BIN_PACKET
@@ -147,7 +147,16 @@ impl KernelConfig {
         }
     }
 
-    pub fn constants(&self) -> [(&'static str, f64); 17] {
+    /// The kernel's entry point: `main_bins` renders packets from bins, `main` one pixel.
+    pub fn entry_point(&self) -> &'static str {
+        if self.use_bins {
+            "main_bins"
+        } else {
+            "main"
+        }
+    }
+
+    pub fn constants(&self) -> [(&'static str, f64); 16] {
         let b = |v: bool| if v { 1.0 } else { 0.0 };
         [
             ("HAS_SPHERES", b(self.has_spheres)),
@@ -166,7 +175,6 @@ impl KernelConfig {
             ("SPHERE_TEST", self.sphere_test as u32 as f64),
             ("USE_BVH", b(self.use_bvh)),
             ("USE_BINS", b(self.use_bins)),
-            ("PACKET", self.packet() as f64),
         ]
     }
 }
@@ -383,7 +391,7 @@ impl GpuRenderer {
                     label: Some("raycast"),
                     layout: Some(&self.pipeline_layout),
                     module: &self.module,
-                    entry_point: Some("main"),
+                    entry_point: Some(config.entry_point()),
                     compilation_options: wgpu::PipelineCompilationOptions {
                         constants: &config.constants(),
                         zero_initialize_workgroup_memory: false,

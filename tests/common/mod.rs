@@ -52,3 +52,14 @@ pub fn gpu() -> Option<&'static GpuRenderer> {
         Err(e) => panic!("GPU test without a GPU adapter: {e}\nInstall lavapipe (apt-get install mesa-vulkan-drivers), or set RAYCASTER_SKIP_GPU=1 to skip on purpose."),
     }
 }
+
+/// The GPU renderer on the same device, finding candidates as `acceleration` says.
+pub fn gpu_with(acceleration: raycaster::gpu::Acceleration) -> Option<GpuRenderer> {
+    gpu()
+        .map(|g| g.on_same_device(raycaster::gpu::GpuOptions { acceleration, ..raycaster::gpu::GpuOptions::default() }))
+}
+
+/// Every way the kernel can find candidates, `auto` first, so that a test over all of them
+/// covers the bins and the hierarchy whatever the cost model picks at the test's sizes.
+pub const ACCELERATIONS: [raycaster::gpu::Acceleration; 3] =
+    [raycaster::gpu::Acceleration::Auto, raycaster::gpu::Acceleration::Bins, raycaster::gpu::Acceleration::Hierarchy];
