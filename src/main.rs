@@ -43,8 +43,23 @@ fn run() -> Result<(), Failure> {
 }
 
 fn render(args: &RenderArgs, habits: Habits) -> Result<(), Failure> {
-    let backend = open_backend(args.backend, habits)?;
-    let report = app::job::run(args, &backend, habits.verbosity != Verbosity::Quiet)?;
+    let progress = habits.verbosity != Verbosity::Quiet;
+    let (backend, report) = if args.backend == BackendChoice::Auto {
+        // The scene first: a job small enough is rendered by the reference at once, without
+        // paying for the GPU's start-up.
+        let (scene, parse_ms) = app::job::load(args)?;
+        let backend = if app::backend::reference_is_quicker(&scene, &app::job::options_for(args)) {
+            Backend::Cpu
+        } else {
+            open_backend(args.backend, habits)?
+        };
+        let report = app::job::run_loaded(scene, parse_ms, args, &backend, progress)?;
+        (backend, report)
+    } else {
+        let backend = open_backend(args.backend, habits)?;
+        let report = app::job::run(args, &backend, progress)?;
+        (backend, report)
+    };
     warn(&report.warnings, habits);
     if let Some(fallback) = report.notice.as_ref().filter(|_| habits.verbosity != Verbosity::Quiet) {
         say(&format!("warning: {fallback}"));

@@ -168,7 +168,8 @@ fn no_image_is_written_when_another_fails() {
 }
 
 /// With no Vulkan driver: `--backend gpu` fails with a message that says how to get one;
-/// `--backend auto` renders on the CPU and says so on stderr.
+/// `--backend auto` renders on the CPU and says so on stderr. (The image is large enough
+/// that `auto` does try the GPU: see the next test for small jobs.)
 #[test]
 fn without_an_adapter_gpu_fails_and_auto_falls_back() {
     let dir = tempfile::tempdir().unwrap();
@@ -179,8 +180,8 @@ fn without_an_adapter_gpu_fails_and_auto_falls_back() {
                 "-input",
                 "scenes/spheres_ortho.txt",
                 "-size",
-                "8",
-                "8",
+                "1500",
+                "1500",
                 "-output",
                 path_str(&out),
                 "--backend",
@@ -201,6 +202,43 @@ fn without_an_adapter_gpu_fails_and_auto_falls_back() {
     assert!(auto.status.success(), "{}", stderr(&auto));
     assert!(stderr(&auto).contains("rendering with the CPU reference instead"), "{}", stderr(&auto));
     assert!(out.exists());
+}
+
+/// A job so small that the GPU's start-up would dominate (pixels × primitives at most
+/// `REFERENCE_QUICKER_BELOW`) is rendered by `auto` with the reference without opening the
+/// GPU at all: no driver is looked for, so none is missed, and the image is the reference's.
+#[test]
+fn auto_renders_small_jobs_with_the_reference_without_opening_the_gpu() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |backend: &str, size: &str, out: &str| {
+        Command::new(env!("CARGO_BIN_EXE_raycaster"))
+            .args([
+                "-input",
+                "scenes/spheres_ortho.txt",
+                "-size",
+                size,
+                size,
+                "-output",
+                out,
+                "--backend",
+                backend,
+                "-v",
+            ])
+            .current_dir(env!("CARGO_MANIFEST_DIR"))
+            .env("VK_DRIVER_FILES", "/nonexistent/icd.json")
+            .env("VK_ICD_FILENAMES", "/nonexistent/icd.json")
+            .env("WGPU_BACKEND", "vulkan")
+            .output()
+            .unwrap()
+    };
+    let auto = dir.path().join("auto.tga");
+    let cpu = dir.path().join("cpu.tga");
+    let small = run("auto", "64", path_str(&auto));
+    assert!(small.status.success(), "{}", stderr(&small));
+    assert!(!stderr(&small).contains("no GPU adapter"), "{}", stderr(&small));
+    assert!(stderr(&small).contains("backend: cpu"), "{}", stderr(&small));
+    assert!(run("cpu", "64", path_str(&cpu)).status.success());
+    assert_eq!(std::fs::read(&auto).unwrap(), std::fs::read(&cpu).unwrap());
 }
 
 /// The GPU backend through the binary writes the same image as the reference.

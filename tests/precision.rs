@@ -329,7 +329,8 @@ fn raycaster(args: &[&str]) -> std::process::Output {
 }
 
 /// `--backend gpu` refuses with the located one-line error and exit status 1, writing
-/// nothing; `auto` renders with the reference, says so in one line, exits 0, and writes
+/// nothing; `auto` (at a size where it does try the GPU) renders with the reference, says
+/// so in one line, exits 0, and writes
 /// the very image `--backend cpu` writes.
 #[test]
 fn the_command_line_refuses_on_gpu_and_falls_back_on_auto() {
@@ -347,7 +348,7 @@ fn the_command_line_refuses_on_gpu_and_falls_back_on_auto() {
     let scene = scene.to_str().unwrap();
     let out = |name: &str| dir.path().join(name).to_str().unwrap().to_string();
     let run = |backend: &str, image: &str| {
-        raycaster(&["-input", scene, "-size", "16", "16", "-output", image, "--backend", backend])
+        raycaster(&["-input", scene, "-size", "1500", "1500", "-output", image, "--backend", backend])
     };
 
     let gpu = run("gpu", &out("gpu.tga"));

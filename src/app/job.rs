@@ -94,9 +94,25 @@ impl Report {
 /// them or, on failure, none). With `progress`, a bar over the rows appears on a terminal
 /// when the render takes long.
 pub fn run(args: &RenderArgs, backend: &Backend, progress: bool) -> Result<Report, Error> {
+    let (scene, parse_ms) = load(args)?;
+    run_loaded(scene, parse_ms, args, backend, progress)
+}
+
+/// Reads `args.input`; returns the scene and the milliseconds it took.
+pub fn load(args: &RenderArgs) -> Result<(Scene, f64), Error> {
     let start = Instant::now();
     let scene = scene::load_scene(&args.input)?;
-    let parse_ms = start.elapsed().as_secs_f64() * 1e3;
+    Ok((scene, start.elapsed().as_secs_f64() * 1e3))
+}
+
+/// [`run`] for a scene [`load`] read.
+pub fn run_loaded(
+    scene: Scene,
+    parse_ms: f64,
+    args: &RenderArgs,
+    backend: &Backend,
+    progress: bool,
+) -> Result<Report, Error> {
     let (stats, notice, render_ms, write_ms) = render_scene(&scene, args, backend, progress)?;
     Ok(Report { warnings: scene.warnings, notice, stats, parse_ms, render_ms, write_ms })
 }
