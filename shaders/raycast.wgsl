@@ -504,16 +504,20 @@ fn box_entry(node: BvhNode, ray: Ray, inv: vec3<f32>, parallel: vec3<bool>, tmin
     return select(NO_HIT, entry, entry <= exit);
 }
 
-fn try_ref(r: u32, ray: Ray, shear: Shear, tmin: f32, best: Closest) -> Closest {
-    // A hierarchy of triangles alone holds them in leaf order: the slot is the index.
-    if (!HAS_SPHERES && !HAS_ELLIPSOIDS) {
-        return try_triangle(r, ray, shear, tmin, best);
-    }
-    let kind = r >> 30u;
-    let index = r & REF_INDEX_MASK;
+// Tests the primitive a reference names (kind << 30 | index; with triangles alone, the
+// triangle index itself: REF_TRIANGLE is 0). `binned` selects the triangle test of a bin
+// (try_binned_triangle) over the hierarchy's; every caller passes a constant, so the
+// choice is folded away.
+fn try_ref(r: u32, ray: Ray, shear: Shear, tmin: f32, best: Closest, binned: bool) -> Closest {
+    let kind = select(r >> 30u, REF_TRIANGLE, !HAS_SPHERES && !HAS_ELLIPSOIDS);
+    let index = select(r & REF_INDEX_MASK, r, !HAS_SPHERES && !HAS_ELLIPSOIDS);
     var out = best;
     if (HAS_TRIANGLES && kind == REF_TRIANGLE) {
-        out = try_triangle(index, ray, shear, tmin, out);
+        if (binned) {
+            out = try_binned_triangle(index, ray, shear, tmin, out);
+        } else {
+            out = try_triangle(index, ray, shear, tmin, out);
+        }
     }
     if (HAS_SPHERES && kind == REF_SPHERE) {
         out = try_sphere(index, ray, tmin, out);
@@ -557,7 +561,7 @@ fn traverse(ray: Ray, shear: Shear, tmin: f32, start: Closest) -> Closest {
         let node = nodes[stack_node[len]];
         if (node.count > 0u) {
             for (var k = node.first; k < node.first + node.count; k++) {
-                best = try_ref(leaf_slot(k), ray, shear, tmin, best);
+                best = try_ref(leaf_slot(k), ray, shear, tmin, best, false);
             }
             continue;
         }
@@ -623,25 +627,6 @@ fn try_binned_triangle(k: u32, ray: Ray, shear: Shear, tmin: f32, best: Closest)
     return try_triangle(k, ray, shear, tmin, best);
 }
 
-fn try_binned(r: u32, ray: Ray, shear: Shear, tmin: f32, best: Closest) -> Closest {
-    // Triangles alone: the reference is the index (REF_TRIANGLE is 0).
-    if (!HAS_SPHERES && !HAS_ELLIPSOIDS) {
-        return try_binned_triangle(r, ray, shear, tmin, best);
-    }
-    let kind = r >> 30u;
-    let index = r & REF_INDEX_MASK;
-    var out = best;
-    if (HAS_TRIANGLES && kind == REF_TRIANGLE) {
-        out = try_binned_triangle(index, ray, shear, tmin, out);
-    }
-    if (HAS_SPHERES && kind == REF_SPHERE) {
-        out = try_sphere(index, ray, tmin, out);
-    }
-    if (HAS_ELLIPSOIDS && kind == REF_ELLIPSOID) {
-        out = try_ellipsoid(index, ray, tmin, out);
-    }
-    return out;
-}
 
 // The packet's rays and closest hits so far (private: registers once the calls are inlined).
 var<private> R0: Ray;
@@ -676,10 +661,10 @@ fn walk_bin_packet(bin: u32, tmin: f32) {
             H3 = keep_nearer(H3, eye_triangle_t(tri, R3, tmin), r);
             continue;
         }
-        H0 = try_binned(r, R0, s0, tmin, H0);
-        H1 = try_binned(r, R1, s1, tmin, H1);
-        H2 = try_binned(r, R2, s2, tmin, H2);
-        H3 = try_binned(r, R3, s3, tmin, H3);
+        H0 = try_ref(r, R0, s0, tmin, H0, true);
+        H1 = try_ref(r, R1, s1, tmin, H1, true);
+        H2 = try_ref(r, R2, s2, tmin, H2, true);
+        H3 = try_ref(r, R3, s3, tmin, H3, true);
     }
 }
 
