@@ -424,10 +424,7 @@ fn closest_plane(ray: Ray, tmin: f32) -> Closest {
     var best = Closest(NO_HIT, KIND_NONE, 0u);
     if (HAS_PLANES) {
         for (var k = 0u; k < P.num_planes; k++) {
-            let t = plane_t(planes[k], ray, tmin);
-            if (t < best.t) {
-                best = Closest(t, KIND_PLANE, k);
-            }
+            best = nearer(best, plane_t(planes[k], ray, tmin), KIND_PLANE, k);
         }
     }
     return best;
@@ -460,29 +457,29 @@ fn closest_hit(ray: Ray) -> Closest {
     return best;
 }
 
+// The closer of the hit so far and a hit at t on primitive `index` of `kind` (ties keep the
+// earlier one).
+fn nearer(best: Closest, t: f32, kind: u32, index: u32) -> Closest {
+    if (t < best.t) {
+        return Closest(t, kind, index);
+    }
+    return best;
+}
+
 fn try_sphere(k: u32, ray: Ray, tmin: f32, best: Closest) -> Closest {
     let s = spheres[k];
     let t = sphere_t(ray.origin - s.center, ray.direction, s.radius, tmin);
-    if (t < best.t) {
-        return Closest(t, KIND_SPHERE, k);
-    }
-    return best;
+    return nearer(best, t, KIND_SPHERE, k);
 }
 
 fn try_ellipsoid(k: u32, ray: Ray, tmin: f32, best: Closest) -> Closest {
     let t = ellipsoid_t(ellipsoids[k], ray, tmin);
-    if (t < best.t) {
-        return Closest(t, KIND_ELLIPSOID, k);
-    }
-    return best;
+    return nearer(best, t, KIND_ELLIPSOID, k);
 }
 
 fn try_triangle(k: u32, ray: Ray, shear: Shear, tmin: f32, best: Closest) -> Closest {
     let t = triangle_t(triangles[k], ray, shear, tmin);
-    if (t < best.t) {
-        return Closest(t, KIND_TRIANGLE, k);
-    }
-    return best;
+    return nearer(best, t, KIND_TRIANGLE, k);
 }
 
 // Entry distance of the ray into a node's box within [tmin, tmax], or NO_HIT. Robust slab
@@ -612,10 +609,7 @@ fn eye_triangle_t(tri: EyeTriangle, ray: Ray, tmin: f32) -> f32 {
 
 fn try_eye_triangle(k: u32, ray: Ray, tmin: f32, best: Closest) -> Closest {
     let t = eye_triangle_t(eye_triangles[k], ray, tmin);
-    if (t < best.t) {
-        return Closest(t, KIND_TRIANGLE, k);
-    }
-    return best;
+    return nearer(best, t, KIND_TRIANGLE, k);
 }
 
 // With bins, the watertight test takes its primary-ray form (the same guarantee, from
@@ -655,10 +649,10 @@ fn walk_bin_packet(bin: u32, tmin: f32) {
         let r = item.reference;
         if (!HAS_SPHERES && !HAS_ELLIPSOIDS && TRIANGLE_TEST == TRIANGLE_WATERTIGHT) {
             let tri = eye_triangles[r];
-            H0 = keep_nearer(H0, eye_triangle_t(tri, R0, tmin), r);
-            H1 = keep_nearer(H1, eye_triangle_t(tri, R1, tmin), r);
-            H2 = keep_nearer(H2, eye_triangle_t(tri, R2, tmin), r);
-            H3 = keep_nearer(H3, eye_triangle_t(tri, R3, tmin), r);
+            H0 = nearer(H0, eye_triangle_t(tri, R0, tmin), KIND_TRIANGLE, r);
+            H1 = nearer(H1, eye_triangle_t(tri, R1, tmin), KIND_TRIANGLE, r);
+            H2 = nearer(H2, eye_triangle_t(tri, R2, tmin), KIND_TRIANGLE, r);
+            H3 = nearer(H3, eye_triangle_t(tri, R3, tmin), KIND_TRIANGLE, r);
             continue;
         }
         H0 = try_ref(r, R0, s0, tmin, H0, true);
@@ -666,13 +660,6 @@ fn walk_bin_packet(bin: u32, tmin: f32) {
         H2 = try_ref(r, R2, s2, tmin, H2, true);
         H3 = try_ref(r, R3, s3, tmin, H3, true);
     }
-}
-
-fn keep_nearer(best: Closest, t: f32, triangle: u32) -> Closest {
-    if (t < best.t) {
-        return Closest(t, KIND_TRIANGLE, triangle);
-    }
-    return best;
 }
 
 struct Surface {

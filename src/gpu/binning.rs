@@ -47,8 +47,15 @@ pub struct Candidate {
 }
 
 impl Bins {
-    /// Bins `candidates` for the image `rays` describes.
-    pub fn build(rays: &PrimaryRays, triangles: &[GpuTriangle], candidates: &[Candidate]) -> Bins {
+    /// Bins `candidates` for the image `rays` describes, or `None` when `worth_it` turns
+    /// down the lists' lengths, which are known before the lists are sorted and filled (so
+    /// a scene that goes to the hierarchy pays only for the projection and the count).
+    pub fn build(
+        rays: &PrimaryRays,
+        triangles: &[GpuTriangle],
+        candidates: &[Candidate],
+        worth_it: impl FnOnce(&ListLengths) -> bool,
+    ) -> Option<Bins> {
         let start = std::time::Instant::now();
         let projector = Projector::new(rays);
         let columns = rays.width.div_ceil(BIN_SIDE);
@@ -64,7 +71,6 @@ impl Bins {
             let tiles = [rect[0] / BIN_SIDE, rect[1] / BIN_SIDE, rect[2] / BIN_SIDE, rect[3] / BIN_SIDE];
             placed.push((projector.near_bound(&c.bounds), c.reference, tiles));
         }
-        placed.sort_by(|a, b| a.0.total_cmp(&b.0));
         let mut counts = vec![0u32; (columns * bin_rows) as usize];
         for (_, _, [c0, r0, c1, r1]) in &placed {
             for row in *r0..=*r1 {
@@ -73,6 +79,15 @@ impl Bins {
                 }
             }
         }
+        let lengths = ListLengths {
+            mean: counts.iter().map(|&c| c as f64).sum::<f64>() / counts.len().max(1) as f64,
+            max: counts.iter().copied().max().unwrap_or(0),
+        };
+        if !worth_it(&lengths) {
+            return None;
+        }
+        // Counting sort keeps this order within each bin: nearest first.
+        placed.sort_by(|a, b| a.0.total_cmp(&b.0));
         let mut ranges = Vec::with_capacity(counts.len());
         let mut total = 0u32;
         for &count in &counts {
@@ -92,19 +107,17 @@ impl Bins {
         }
         let eye_triangles =
             triangles.iter().map(|t| EyeTriangle::new(t, rays.orthographic, projector.direction)).collect();
-        Bins { columns, ranges, items, eye_triangles, build_ms: start.elapsed().as_secs_f64() * 1e3 }
+        Some(Bins { columns, ranges, items, eye_triangles, build_ms: start.elapsed().as_secs_f64() * 1e3 })
     }
+}
 
-    /// The longest list of any bin: every invocation of that bin walks it in one loop.
-    pub fn max_list_length(&self) -> u32 {
-        self.ranges.iter().map(|r| r[1]).max().unwrap_or(0)
-    }
-
-    /// Candidates an invocation tests on average (each pixel of a bin tests the whole list
-    /// at worst): the cost model compares this with the hierarchy.
-    pub fn mean_list_length(&self) -> f64 {
-        self.items.len() as f64 / self.ranges.len().max(1) as f64
-    }
+/// How long the bins' lists are: the cost model's inputs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ListLengths {
+    /// Items per bin on average: candidates an invocation tests at worst, on average.
+    pub mean: f64,
+    /// The longest list: every invocation of that bin walks it in one loop.
+    pub max: u32,
 }
 
 /// The finite primitives of a flattened scene, for [`Bins::build`].

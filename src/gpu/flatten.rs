@@ -51,7 +51,7 @@ pub const BVH_MIN_PRIMITIVES: usize = 8;
 pub const BINS_MIN_PIXELS: u64 = 1 << 18;
 
 /// Bins are used while a bin lists at most this many primitives on average (see
-/// [`Bins::mean_list_length`]); longer lists, as sub-pixel triangles make, go to the
+/// [`binning::ListLengths`]); longer lists, as sub-pixel triangles make, go to the
 /// hierarchy.
 pub const BINS_MAX_MEAN_LIST: f64 = 64.0;
 
@@ -134,10 +134,11 @@ impl SceneBuffers {
         let pixels = rays.width as u64 * rays.height as u64;
         if options.acceleration == Acceleration::Bins || (auto && pixels >= BINS_MIN_PIXELS) {
             let candidates = binning::candidates(&self.triangles, &self.sphere_bounds, &self.ellipsoid_bounds);
-            let bins = Bins::build(rays, &self.triangles, &candidates);
-            let short = bins.mean_list_length() <= BINS_MAX_MEAN_LIST && bins.max_list_length() <= LOOP_LIMIT / 2;
-            if options.acceleration == Acceleration::Bins || short {
-                self.bins = Some(bins);
+            let forced = options.acceleration == Acceleration::Bins;
+            self.bins = Bins::build(rays, &self.triangles, &candidates, |lengths| {
+                forced || (lengths.mean <= BINS_MAX_MEAN_LIST && lengths.max <= LOOP_LIMIT / 2)
+            });
+            if self.bins.is_some() {
                 return;
             }
         }
