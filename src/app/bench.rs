@@ -254,7 +254,7 @@ pub fn mesh_scene(name: &str, mesh: Mesh) -> Scene {
         .expect("up (+y) is orthogonal to direction (−z)"),
         lights: vec![DirectionalLight { direction: DVec3::new(-0.5, -0.5, -1.0), color: DVec3::splat(0.9) }],
         background: Background { color: DVec3::splat(0.2), ambient: DVec3::splat(0.1) },
-        materials: vec![Material { diffuse: DVec3::splat(0.8) }],
+        materials: vec![Material::diffuse(DVec3::splat(0.8))],
         root: vec![Object {
             shape: Shape::Mesh { mesh: Arc::new(mesh), material: 0 },
             location: Default::default(),

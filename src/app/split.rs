@@ -8,7 +8,7 @@ use crate::app::backend::Backend;
 use crate::app::cli::{RenderArgs, StitchArgs};
 use crate::app::output::{self, Output, Pixels, Sink};
 use raycaster::image_io::{self, FinishedImage, ImageError, ImageFormat, LiveTemp};
-use raycaster::scene::{self, Object, Scene, Shape};
+use raycaster::scene::{self, Scene, Shape};
 use sha2::{Digest, Sha256};
 use std::collections::{BTreeMap, HashSet};
 use std::io::{BufReader, BufWriter, Read, Seek, SeekFrom, Write};
@@ -161,26 +161,20 @@ pub fn scene_hash(scene: &Scene) -> Result<String, String> {
     let mut hasher = Sha256::new();
     hasher.update((text.len() as u64).to_le_bytes());
     hasher.update(&text);
-    fn meshes(objects: &[Object], seen: &mut HashSet<*const scene::Mesh>, hasher: &mut Sha256) {
-        for object in objects {
-            match &object.shape {
-                Shape::Group(children) => meshes(children, seen, hasher),
-                Shape::Transform { child, .. } => meshes(std::slice::from_ref(&**child), seen, hasher),
-                Shape::Mesh { mesh, .. } if seen.insert(std::sync::Arc::as_ptr(mesh)) => {
-                    hasher.update((mesh.positions.len() as u64).to_le_bytes());
-                    for p in &mesh.positions {
-                        p.to_array().iter().for_each(|c| hasher.update(c.to_le_bytes()));
-                    }
-                    hasher.update((mesh.triangles.len() as u64).to_le_bytes());
-                    for t in &mesh.triangles {
-                        t.iter().for_each(|i| hasher.update(i.to_le_bytes()));
-                    }
-                }
-                _ => {}
+    let mut seen = HashSet::new();
+    scene::for_each_leaf(&scene.root, &glam::DMat4::IDENTITY, &mut |leaf| match leaf.shape() {
+        Shape::Mesh { mesh, .. } if seen.insert(std::sync::Arc::as_ptr(mesh)) => {
+            hasher.update((mesh.positions.len() as u64).to_le_bytes());
+            for p in &mesh.positions {
+                p.to_array().iter().for_each(|c| hasher.update(c.to_le_bytes()));
+            }
+            hasher.update((mesh.triangles.len() as u64).to_le_bytes());
+            for t in &mesh.triangles {
+                t.iter().for_each(|i| hasher.update(i.to_le_bytes()));
             }
         }
-    }
-    meshes(&scene.root, &mut HashSet::new(), &mut hasher);
+        _ => {}
+    });
     Ok(hex(&hasher.finalize()))
 }
 

@@ -11,7 +11,7 @@ use super::layout::*;
 use super::{Acceleration, GpuOptions};
 use crate::bvh::{Aabb, Bvh, BvhNode};
 use crate::camera::PrimaryRays;
-use crate::scene::{ellipsoid_extent, Object, Scene, Shape};
+use crate::scene::{ellipsoid_extent, for_each_leaf, Object, Scene, Shape};
 use glam::{DMat3, DMat4, DVec3, Vec3};
 use std::time::Instant;
 
@@ -177,13 +177,12 @@ impl SceneBuffers {
         Some(GpuBvh { nodes: bvh.nodes, prim_refs, order: bvh.order, build_ms: start.elapsed().as_secs_f64() * 1e3 })
     }
 
-    /// Walks the tree with `matrix` mapping the current object space to camera-relative world
-    /// space. The tree depth is bounded by the parser's nesting limit.
-    fn flatten(&mut self, objects: &[Object], matrix: &DMat4) {
-        for object in objects {
-            match &object.shape {
-                Shape::Group(children) => self.flatten(children, matrix),
-                Shape::Transform { matrix: m, child } => self.flatten(std::slice::from_ref(child), &(*matrix * *m)),
+    /// Every primitive of the tree, with `leaf.to_world` mapping its object space to
+    /// camera-relative world space.
+    fn flatten(&mut self, objects: &[Object], to_camera: &DMat4) {
+        for_each_leaf(objects, to_camera, &mut |leaf| {
+            let matrix = &leaf.to_world;
+            match leaf.shape() {
                 Shape::Sphere { center, radius, material } => self.push_sphere(matrix, *center, *radius, *material),
                 Shape::Plane { normal, offset, material } => self.push_plane(matrix, *normal, *offset, *material),
                 Shape::Triangle { vertices, material } => self.push_triangle(matrix, vertices, *material),
@@ -193,8 +192,9 @@ impl SceneBuffers {
                         self.push_triangle(matrix, &mesh.triangle(k), *material);
                     }
                 }
+                Shape::Group(_) | Shape::Transform { .. } => {}
             }
-        }
+        });
     }
 
     fn push_sphere(&mut self, matrix: &DMat4, center: DVec3, radius: f64, material: u32) {

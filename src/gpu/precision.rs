@@ -56,7 +56,7 @@
 
 use crate::camera::PrimaryRays;
 use crate::render::RenderOptions;
-use crate::scene::{Location, Mesh, Object, Scene, Shape};
+use crate::scene::{try_for_each_leaf, Location, Mesh, Object, Scene, Shape};
 use glam::{DMat3, DMat4, DVec3};
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -122,7 +122,7 @@ pub fn check(scene: &Scene, options: &RenderOptions) -> Result<(), PrecisionErro
     for (k, material) in scene.materials.iter().enumerate() {
         checker.colour(&format!("Material {} diffuseColor", k), material.diffuse)?;
     }
-    checker.objects(&scene.root, &DMat4::from_translation(-scene.camera.center), None)
+    checker.objects(&scene.root, &DMat4::from_translation(-scene.camera.center))
 }
 
 struct Checker<'a> {
@@ -169,39 +169,36 @@ impl Checker<'_> {
         }
     }
 
-    /// `matrix` maps the current object space to camera-relative world space, as in
-    /// [`super::buffers`]; `transform` is the innermost enclosing Transform. The depth is
-    /// bounded by the parser's nesting limit.
-    fn objects(&self, objects: &[Object], matrix: &DMat4, transform: Option<Location>) -> Result<(), PrecisionError> {
-        for object in objects {
+    /// Every primitive, with `leaf.to_world` mapping its object space to camera-relative
+    /// world space as in [`super::flatten`], in file order.
+    fn objects(&self, objects: &[Object], to_camera: &DMat4) -> Result<(), PrecisionError> {
+        try_for_each_leaf(objects, to_camera, &mut |leaf| {
+            let (object, matrix, transform) = (leaf.object, &leaf.to_world, leaf.transform);
             // A field's own place where the parser kept it, else the object's.
             let field = |k: usize| Some(object.fields[k]).filter(|l| l.line != 0).unwrap_or(object.location);
             match &object.shape {
-                Shape::Group(children) => self.objects(children, matrix, transform)?,
-                Shape::Transform { matrix: m, child } => {
-                    self.objects(std::slice::from_ref(child), &(*matrix * *m), Some(object.location))?
-                }
                 Shape::Sphere { center, radius, .. } => {
                     // A radius fine in itself is made out of range by the transform around it.
                     let scaled_by = if in_range(*radius) { transform.unwrap_or(field(1)) } else { field(1) };
-                    self.sphere([field(0), field(1), scaled_by], matrix, *center, *radius)?
+                    self.sphere([field(0), field(1), scaled_by], matrix, *center, *radius)
                 }
                 Shape::Plane { normal, offset, .. } => {
                     let n = normal.normalize();
                     let world_normal = DMat3::from_mat4(*matrix).inverse().transpose().mul_vec3(n).normalize();
                     self.vector(field(0), "Plane normal", world_normal)?;
                     let offset = world_normal.dot(matrix.transform_point3(*offset * n));
-                    self.scalar(Some(field(1)), "Plane offset from the camera", offset)?;
+                    self.scalar(Some(field(1)), "Plane offset from the camera", offset)
                 }
                 Shape::Triangle { vertices, .. } => {
                     for (k, v) in vertices.iter().enumerate() {
                         self.vector(field(k), &format!("Triangle vertex{k}"), matrix.transform_point3(*v))?;
                     }
+                    Ok(())
                 }
-                Shape::Mesh { mesh, .. } => self.mesh(object.location, matrix, mesh)?,
+                Shape::Mesh { mesh, .. } => self.mesh(object.location, matrix, mesh),
+                Shape::Group(_) | Shape::Transform { .. } => Ok(()),
             }
-        }
-        Ok(())
+        })
     }
 
     /// The same cases as the flattening: a sphere under a similarity stays a sphere, any

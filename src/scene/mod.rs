@@ -10,8 +10,10 @@ mod lexer;
 pub mod model;
 mod obj;
 mod parser;
+pub mod walk;
 
 pub use error::{SceneError, SceneWarning};
 pub use model::*;
 pub use obj::{load_obj, parse_obj};
 pub use parser::{load_scene, parse_scene, MAX_NESTING};
+pub use walk::{for_each_leaf, try_for_each_leaf, Leaf};

@@ -116,9 +116,46 @@ impl Default for Background {
     }
 }
 
+/// A material as the course defines it (`PhongMaterial`, `Material` for short; docs/SPEC.md
+/// §2), with the course parser's defaults for fields a file leaves out
+/// ([`Material::default`]). The renderers shade with `diffuse` only until Phong shading,
+/// reflection and refraction arrive; the other terms are read and kept so that no stage
+/// between the file and the kernel has to change shape when they do.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Material {
+    /// `diffuseColor`, default (1, 1, 1).
     pub diffuse: DVec3,
+    /// `specularColor`, default (0, 0, 0).
+    pub specular: DVec3,
+    /// `exponent` of the Blinn–Torrance specular lobe, default 1.
+    pub exponent: f64,
+    /// `reflectiveColor`: the weight of the mirror ray, default (0, 0, 0).
+    pub reflective: DVec3,
+    /// `transparentColor`: the weight of the refracted ray, default (0, 0, 0).
+    pub transparent: DVec3,
+    /// `indexOfRefraction` of the material's inside, default 1.
+    pub index_of_refraction: f64,
+}
+
+impl Default for Material {
+    /// The course parser's defaults (`../shared/mit6837/GRAMMAR.md`, A3 and A4).
+    fn default() -> Self {
+        Material {
+            diffuse: DVec3::ONE,
+            specular: DVec3::ZERO,
+            exponent: 1.0,
+            reflective: DVec3::ZERO,
+            transparent: DVec3::ZERO,
+            index_of_refraction: 1.0,
+        }
+    }
+}
+
+impl Material {
+    /// A material with this diffuse colour and the defaults elsewhere.
+    pub fn diffuse(color: DVec3) -> Material {
+        Material { diffuse: color, ..Material::default() }
+    }
 }
 
 /// One node of the object tree with the place it was written.
@@ -267,47 +304,43 @@ impl Extent {
     }
 }
 
-impl Shape {
-    /// How far the shape reaches in its own coordinates (those of the object holding it):
-    /// exact for every finite shape, [`Extent::Unbounded`] for a plane and for anything
-    /// that contains one. A group with no objects is [`Bounds::EMPTY`].
+impl Object {
+    /// How far the object reaches in the coordinates of the object holding it: exact for
+    /// every finite shape, [`Extent::Unbounded`] for a plane and for anything that contains
+    /// one. A group with no objects is [`Bounds::EMPTY`].
     pub fn bounds(&self) -> Extent {
-        self.extent_under(None)
-    }
-
-    /// The extent after `to_parent` (`None`: the identity) maps the shape's points. Exact:
-    /// spheres become ellipsoids with their own box, triangles and meshes the box of their
-    /// mapped vertices (an affine map keeps convex hulls), nested transforms compose.
-    fn extent_under(&self, to_parent: Option<&DMat4>) -> Extent {
-        let map = |p: DVec3| to_parent.map_or(p, |m| m.transform_point3(p));
-        Extent::Bounded(match self {
-            Shape::Group(children) => {
-                let children = children.iter().map(|child| child.shape.extent_under(to_parent));
-                return children.fold(Extent::Bounded(Bounds::EMPTY), |all, child| all.union(&child));
-            }
-            Shape::Transform { matrix, child } => {
-                let composed = to_parent.map_or(*matrix, |m| *m * *matrix);
-                return child.shape.extent_under(Some(&composed));
-            }
-            Shape::Plane { .. } => return Extent::Unbounded,
-            Shape::Sphere { center, radius, .. } => match to_parent {
-                None => Bounds::sphere(*center, *radius),
-                // The unit sphere carried by to_parent · T(center) · S(radius).
-                Some(m) => Bounds::ellipsoid(
-                    &(*m * DMat4::from_translation(*center) * DMat4::from_scale(DVec3::splat(*radius))),
-                ),
-            },
-            Shape::Triangle { vertices, .. } => Bounds::of_points(vertices.map(map)),
-            Shape::Mesh { mesh, .. } => Bounds::of_points(mesh.positions.iter().map(|&p| map(p))),
-        })
+        extent_of(std::slice::from_ref(self))
     }
 }
 
-impl Object {
-    /// [`Shape::bounds`] of this object.
-    pub fn bounds(&self) -> Extent {
-        self.shape.bounds()
-    }
+/// The union of the leaves' extents ([`leaf_extent`]) under `objects`.
+fn extent_of(objects: &[Object]) -> Extent {
+    let mut all = Extent::Bounded(Bounds::EMPTY);
+    super::walk::for_each_leaf(objects, &DMat4::IDENTITY, &mut |leaf| {
+        let to_world = leaf.transform.is_some().then_some(&leaf.to_world);
+        all = all.union(&leaf_extent(leaf.shape(), to_world));
+    });
+    all
+}
+
+/// The extent of a primitive after `to_world` (`None`: the identity) maps its points.
+/// Exact: spheres become ellipsoids with their own box, triangles and meshes the box of
+/// their mapped vertices (an affine map keeps convex hulls).
+fn leaf_extent(shape: &Shape, to_world: Option<&DMat4>) -> Extent {
+    let map = |p: DVec3| to_world.map_or(p, |m| m.transform_point3(p));
+    Extent::Bounded(match shape {
+        Shape::Plane { .. } => return Extent::Unbounded,
+        Shape::Sphere { center, radius, .. } => match to_world {
+            None => Bounds::sphere(*center, *radius),
+            // The unit sphere carried by to_world · T(center) · S(radius).
+            Some(m) => Bounds::ellipsoid(
+                &(*m * DMat4::from_translation(*center) * DMat4::from_scale(DVec3::splat(*radius))),
+            ),
+        },
+        Shape::Triangle { vertices, .. } => Bounds::of_points(vertices.map(map)),
+        Shape::Mesh { mesh, .. } => Bounds::of_points(mesh.positions.iter().map(|&p| map(p))),
+        Shape::Group(_) | Shape::Transform { .. } => unreachable!("the walk visits leaves only"),
+    })
 }
 
 /// How many primitives of each kind a scene holds (mesh triangles counted one by one).
@@ -328,22 +361,18 @@ impl Scene {
     /// How far the scene reaches in world space: the union of its objects' extents
     /// ([`Shape::bounds`]); unbounded as soon as it has a plane.
     pub fn bounds(&self) -> Extent {
-        self.root.iter().fold(Extent::Bounded(Bounds::EMPTY), |all, object| all.union(&object.bounds()))
+        extent_of(&self.root)
     }
 
     pub fn primitive_counts(&self) -> PrimitiveCounts {
         let mut counts = PrimitiveCounts::default();
-        let mut pending: Vec<&Object> = self.root.iter().collect();
-        while let Some(object) = pending.pop() {
-            match &object.shape {
-                Shape::Group(children) => pending.extend(children),
-                Shape::Transform { child, .. } => pending.push(child),
-                Shape::Sphere { .. } => counts.spheres += 1,
-                Shape::Plane { .. } => counts.planes += 1,
-                Shape::Triangle { .. } => counts.triangles += 1,
-                Shape::Mesh { mesh, .. } => counts.triangles += mesh.triangles.len(),
-            }
-        }
+        super::walk::for_each_leaf(&self.root, &DMat4::IDENTITY, &mut |leaf| match leaf.shape() {
+            Shape::Sphere { .. } => counts.spheres += 1,
+            Shape::Plane { .. } => counts.planes += 1,
+            Shape::Triangle { .. } => counts.triangles += 1,
+            Shape::Mesh { mesh, .. } => counts.triangles += mesh.triangles.len(),
+            Shape::Group(_) | Shape::Transform { .. } => {}
+        });
         counts
     }
 }
@@ -375,7 +404,7 @@ mod tests {
 
     #[test]
     fn sphere_bounds() {
-        let bounds = bounded(sphere(DVec3::new(1.0, 2.0, 3.0), 2.0).bounds());
+        let bounds = bounded(object(sphere(DVec3::new(1.0, 2.0, 3.0), 2.0)).bounds());
         assert_eq!(bounds, Bounds { min: DVec3::new(-1.0, 0.0, 1.0), max: DVec3::new(3.0, 4.0, 5.0) });
     }
 
@@ -389,7 +418,7 @@ mod tests {
         let shape = transform(matrix, sphere(DVec3::X, 1.0));
         let (c, h) = (2f64.sqrt(), 2.5f64.sqrt());
         let expected = Bounds { min: DVec3::new(c - h, c - h, -3.0), max: DVec3::new(c + h, c + h, 3.0) };
-        assert_close(bounded(shape.bounds()), expected);
+        assert_close(bounded(object(shape).bounds()), expected);
         // Tight: points of the surface reach each face of the box, and none leaves it.
         let mut reached = Bounds::EMPTY;
         for i in 0..=200 {
@@ -408,7 +437,7 @@ mod tests {
         let vertices = [DVec3::ZERO, DVec3::new(1.0, 0.0, 0.0), DVec3::new(0.0, 2.0, -1.0)];
         let triangle = Shape::Triangle { vertices, material: 0 };
         assert_eq!(
-            bounded(triangle.bounds()),
+            bounded(object(triangle.clone()).bounds()),
             Bounds { min: DVec3::new(0.0, 0.0, -1.0), max: DVec3::new(1.0, 2.0, 0.0) }
         );
         // x ↦ 2x + 1 on every axis, then a quarter turn about z: (x, y, z) ↦ (−y, x, z).
@@ -417,7 +446,7 @@ mod tests {
             * DMat4::from_scale(DVec3::splat(2.0));
         // Mapped vertices: (−1, 1, 1), (−1, 3, 1), (−5, 1, −1).
         let expected = Bounds { min: DVec3::new(-5.0, 1.0, -1.0), max: DVec3::new(-1.0, 3.0, 1.0) };
-        assert_close(bounded(transform(matrix, triangle).bounds()), expected);
+        assert_close(bounded(object(transform(matrix, triangle)).bounds()), expected);
     }
 
     #[test]
@@ -432,10 +461,10 @@ mod tests {
         });
         let expected = Bounds { min: DVec3::new(-3.0, -2.0, 0.0), max: DVec3::new(1.0, 4.0, 7.0) };
         assert_eq!(mesh.bounds(), expected);
-        assert_eq!(bounded(Shape::Mesh { mesh: mesh.clone(), material: 0 }.bounds()), expected);
+        assert_eq!(bounded(object(Shape::Mesh { mesh: mesh.clone(), material: 0 }).bounds()), expected);
         let moved = transform(DMat4::from_translation(DVec3::new(10.0, 0.0, 0.0)), Shape::Mesh { mesh, material: 0 });
         assert_eq!(
-            bounded(moved.bounds()),
+            bounded(object(moved).bounds()),
             Bounds { min: expected.min + DVec3::X * 10.0, max: expected.max + DVec3::X * 10.0 }
         );
         let empty = Mesh::default().bounds();
@@ -445,16 +474,16 @@ mod tests {
     #[test]
     fn planes_are_unbounded_and_groups_fold() {
         let plane = Shape::Plane { normal: DVec3::Y, offset: -1.0, material: 0 };
-        assert_eq!(plane.bounds(), Extent::Unbounded);
+        assert_eq!(object(plane.clone()).bounds(), Extent::Unbounded);
         let rotated = transform(DMat4::from_rotation_x(0.3), plane.clone());
-        assert_eq!(rotated.bounds(), Extent::Unbounded);
-        assert_eq!(Shape::Group(Vec::new()).bounds(), Extent::Bounded(Bounds::EMPTY));
+        assert_eq!(object(rotated).bounds(), Extent::Unbounded);
+        assert_eq!(object(Shape::Group(Vec::new())).bounds(), Extent::Bounded(Bounds::EMPTY));
         let a = sphere(DVec3::ZERO, 1.0);
         let b = transform(DMat4::from_translation(DVec3::new(5.0, 0.0, 0.0)), sphere(DVec3::ZERO, 2.0));
         let group = Shape::Group(vec![object(a.clone()), object(b.clone())]);
         let union = Bounds { min: DVec3::new(-1.0, -2.0, -2.0), max: DVec3::new(7.0, 2.0, 2.0) };
-        assert_close(bounded(group.bounds()), union);
-        assert_eq!(Shape::Group(vec![object(a), object(b), object(plane)]).bounds(), Extent::Unbounded);
+        assert_close(bounded(object(group).bounds()), union);
+        assert_eq!(object(Shape::Group(vec![object(a), object(b), object(plane)])).bounds(), Extent::Unbounded);
     }
 
     #[test]
@@ -463,7 +492,7 @@ mod tests {
         let inner = transform(DMat4::from_scale(DVec3::splat(2.0)), sphere(DVec3::ZERO, 1.0));
         let outer = transform(DMat4::from_translation(DVec3::new(10.0, 0.0, 0.0)), inner);
         let expected = Bounds { min: DVec3::new(8.0, -2.0, -2.0), max: DVec3::new(12.0, 2.0, 2.0) };
-        assert_close(bounded(outer.bounds()), expected);
+        assert_close(bounded(object(outer).bounds()), expected);
     }
 
     #[test]

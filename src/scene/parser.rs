@@ -525,20 +525,23 @@ impl<'a> Parser<'a> {
     fn material(&mut self, keyword: Token<'a>) -> Result<Material> {
         let phong = keyword.text == "PhongMaterial";
         let fields: &[&'static str] = if phong { &PHONG_FIELDS } else { &["diffuseColor"] };
-        let mut diffuse = DVec3::ONE;
+        let mut material = Material::default();
         self.fields_block(keyword, fields, |p, field| {
             match field.text {
-                "diffuseColor" => diffuse = p.vec3()?.0,
-                // Parsed for syntax, then dropped: the ray caster only shades diffusely.
-                "exponent" | "indexOfRefraction" => drop(p.number()?),
-                _ => drop(p.vec3()?),
+                "diffuseColor" => material.diffuse = p.vec3()?.0,
+                "specularColor" => material.specular = p.vec3()?.0,
+                "exponent" => material.exponent = p.number()?.0,
+                "reflectiveColor" => material.reflective = p.vec3()?.0,
+                "transparentColor" => material.transparent = p.vec3()?.0,
+                _ => material.index_of_refraction = p.number()?.0,
             }
             Ok(())
         })?;
+        // Kept in the model, but the shading does not use them yet: say so once.
         if phong && !self.warnings.iter().any(|w| w.message == PHONG_WARNING) {
             self.warnings.push(SceneWarning::new(self.path, Some(keyword.location), PHONG_WARNING));
         }
-        Ok(Material { diffuse })
+        Ok(material)
     }
 
     // ---- objects ----
