@@ -8,18 +8,20 @@ use raycaster::scene::{
 };
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
-use std::time::Instant;
+
+mod common;
 
 // ---------------------------------------------------------------------------------------
 // helpers
 
-fn course_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/mit6837/a2")
+/// The course's `a2/` folder, or `None` in a bare clone (the test then skips, with one notice
+/// per test binary: see [`common::corpus`]).
+fn course_dir() -> Option<PathBuf> {
+    common::corpus().map(|corpus| corpus.join("a2"))
 }
 
-fn course_scene(name: &str) -> Scene {
-    let path = course_dir().join(name);
-    load_scene(&path).unwrap_or_else(|e| panic!("{e}"))
+fn course_scene(a2: &Path, name: &str) -> Scene {
+    load_scene(&a2.join(name)).unwrap_or_else(|e| panic!("{e}"))
 }
 
 /// One-line blocks, so the body of a test scene starts on line 4.
@@ -100,7 +102,8 @@ fn on_small_stack<T: Send + 'static>(f: impl FnOnce() -> T + Send + 'static) -> 
 
 #[test]
 fn all_sixteen_course_scenes_parse() {
-    let mut names: Vec<_> = std::fs::read_dir(course_dir())
+    let Some(a2) = course_dir() else { return };
+    let mut names: Vec<_> = std::fs::read_dir(&a2)
         .unwrap()
         .map(|e| e.unwrap().file_name().into_string().unwrap())
         .filter(|n| n.starts_with("scene2_") && n.ends_with(".txt"))
@@ -108,7 +111,7 @@ fn all_sixteen_course_scenes_parse() {
     names.sort();
     assert_eq!(names.len(), 16);
     for name in &names {
-        let scene = course_scene(name);
+        let scene = course_scene(&a2, name);
         assert!(orthonormal(scene.camera.frame()), "{name}");
         assert!(!scene.lights.is_empty(), "{name}");
         assert!(!scene.root.is_empty(), "{name}");
@@ -119,7 +122,8 @@ fn all_sixteen_course_scenes_parse() {
 
 #[test]
 fn scene2_01_values() {
-    let scene = course_scene("scene2_01_diffuse.txt");
+    let Some(a2) = course_dir() else { return };
+    let scene = course_scene(&a2, "scene2_01_diffuse.txt");
     let camera = scene.camera;
     assert_eq!(camera.projection, Projection::Orthographic { size: 5.0 });
     assert_eq!(camera.center, DVec3::new(0.0, 0.0, 10.0));
@@ -140,7 +144,8 @@ fn scene2_01_values() {
 
 #[test]
 fn scene2_03_blocks_in_another_order() {
-    let scene = course_scene("scene2_03_colored_lights.txt");
+    let Some(a2) = course_dir() else { return };
+    let scene = course_scene(&a2, "scene2_03_colored_lights.txt");
     assert_eq!(scene.lights.len(), 3);
     assert_eq!(scene.lights[1].direction, DVec3::new(-0.5, -1.0, 0.0));
     assert_eq!(scene.lights[1].color, DVec3::new(0.0, 0.0, 0.8));
@@ -152,7 +157,8 @@ fn scene2_03_blocks_in_another_order() {
 
 #[test]
 fn scene2_04_perspective_and_material_indices() {
-    let scene = course_scene("scene2_04_perspective.txt");
+    let Some(a2) = course_dir() else { return };
+    let scene = course_scene(&a2, "scene2_04_perspective.txt");
     assert_eq!(scene.camera.projection, Projection::Perspective { angle: 30f64.to_radians() });
     assert_eq!(scene.materials.len(), 3);
     assert_eq!(scene.materials[2].diffuse, DVec3::Z);
@@ -165,7 +171,8 @@ fn scene2_04_perspective_and_material_indices() {
 
 #[test]
 fn scene2_05_inside_sphere() {
-    let scene = course_scene("scene2_05_inside_sphere.txt");
+    let Some(a2) = course_dir() else { return };
+    let scene = course_scene(&a2, "scene2_05_inside_sphere.txt");
     assert_eq!(scene.camera.projection, Projection::Perspective { angle: 45f64.to_radians() });
     let radii: Vec<f64> = scene
         .root
@@ -182,11 +189,12 @@ fn scene2_05_inside_sphere() {
 
 #[test]
 fn scene2_06_plane_and_scene2_07_triangles() {
-    let scene = course_scene("scene2_06_plane.txt");
+    let Some(a2) = course_dir() else { return };
+    let scene = course_scene(&a2, "scene2_06_plane.txt");
     assert_eq!(scene.root.len(), 6);
     assert!(matches!(scene.root[5].shape, Shape::Plane { normal: DVec3::Y, offset: -2.0, material: 3 }));
 
-    let scene = course_scene("scene2_07_sphere_triangles.txt");
+    let scene = course_scene(&a2, "scene2_07_sphere_triangles.txt");
     match &scene.root[2].shape {
         Shape::Triangle { vertices, material } => {
             assert_eq!(
@@ -201,22 +209,23 @@ fn scene2_06_plane_and_scene2_07_triangles() {
 
 #[test]
 fn course_meshes_have_one_triangle_per_face_line() {
+    let Some(a2) = course_dir() else { return };
     for (scene_name, obj_name) in [
         ("scene2_08_cube.txt", "cube.obj"),
         ("scene2_09_bunny_200.txt", "bunny_200.obj"),
         ("scene2_10_bunny_1k.txt", "bunny_1k.obj"),
     ] {
-        let scene = course_scene(scene_name);
+        let scene = course_scene(&a2, scene_name);
         let mut object = only_object(&scene);
         while let Shape::Transform { child, .. } = &object.shape {
             object = child;
         }
         let Shape::Mesh { mesh, material: 0 } = &object.shape else { panic!("{scene_name}: {object:?}") };
-        let obj_path = course_dir().join(obj_name);
+        let obj_path = a2.join(obj_name);
         assert_eq!(mesh.triangles.len(), count_lines_starting(&obj_path, "f "), "{scene_name}");
         assert_eq!(mesh.positions.len(), count_lines_starting(&obj_path, "v "), "{scene_name}");
     }
-    let bunny = course_scene("scene2_10_bunny_1k.txt");
+    let bunny = course_scene(&a2, "scene2_10_bunny_1k.txt");
     assert_eq!(bunny.camera.center, DVec3::new(0.0, 0.8, 5.0));
     let (matrix, _) = transform_of(only_object(&bunny));
     // UniformScale 5 then (applied first) Translate 0.03 -0.0666 0.
@@ -226,18 +235,20 @@ fn course_meshes_have_one_triangle_per_face_line() {
 
 #[test]
 fn scene2_12_rotation_and_scene2_13_order() {
-    let (matrix, _) = transform_of(only_object(&course_scene("scene2_12_rotated_sphere.txt")));
+    let Some(a2) = course_dir() else { return };
+    let (matrix, _) = transform_of(only_object(&course_scene(&a2, "scene2_12_rotated_sphere.txt")));
     let s = 0.5f64.sqrt();
     assert!(close(matrix.transform_point3(DVec3::X), DVec3::new(s, s, 0.0)));
 
     // ZRotate 45 Scale 1 0.2 1: the squash happens first, then the rotation.
-    let (matrix, _) = transform_of(only_object(&course_scene("scene2_13_rotated_squashed_sphere.txt")));
+    let (matrix, _) = transform_of(only_object(&course_scene(&a2, "scene2_13_rotated_squashed_sphere.txt")));
     assert!(close(matrix.transform_point3(DVec3::Y), DVec3::new(-0.2 * s, 0.2 * s, 0.0)));
 }
 
 #[test]
 fn scene2_14_nested_groups_share_one_mesh() {
-    let scene = course_scene("scene2_14_axes_cube.txt");
+    let Some(a2) = course_dir() else { return };
+    let scene = course_scene(&a2, "scene2_14_axes_cube.txt");
     assert_eq!(scene.camera.direction, DVec3::new(-0.16, -0.12, -0.5));
     assert_eq!(scene.root.len(), 2);
     let Shape::Group(axes) = &scene.root[0].shape else { panic!() };
@@ -258,7 +269,8 @@ fn scene2_14_nested_groups_share_one_mesh() {
 
 #[test]
 fn scene2_15_and_16_transforms_and_materials() {
-    let scene = course_scene("scene2_15_crazy_transforms.txt");
+    let Some(a2) = course_dir() else { return };
+    let scene = course_scene(&a2, "scene2_15_crazy_transforms.txt");
     assert_eq!(leaf_materials(&scene.root), vec![0, 1]);
     let (outer, group) = transform_of(only_object(&scene));
     let Shape::Group(children) = &group.shape else { panic!() };
@@ -266,18 +278,17 @@ fn scene2_15_and_16_transforms_and_materials() {
     // UniformScale 0.5 · XRotate 20 · Translate -3 0 0 keeps x of the origin's image at -1.5.
     assert!((outer.transform_point3(DVec3::ZERO).x + 1.5).abs() < 1e-12);
 
-    let scene = course_scene("scene2_16_t_scale.txt");
+    let scene = course_scene(&a2, "scene2_16_t_scale.txt");
     assert_eq!(scene.root.len(), 6);
     assert_eq!(leaf_materials(&scene.root), vec![3, 0, 1, 2, 4, 5]);
     assert_eq!(scene.camera.projection, Projection::Orthographic { size: 5.5 });
 }
 
 #[test]
-fn large_meshes_load_fast_including_crlf() {
-    let meshes = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/mit6837/meshes");
-    let start = Instant::now();
+fn large_meshes_load_including_crlf() {
+    let Some(corpus) = common::corpus() else { return };
+    let meshes = corpus.join("meshes");
     let bunny = load_obj(&meshes.join("bunny_40k.obj")).unwrap();
-    assert!(start.elapsed().as_secs_f64() < 1.0, "{:?}", start.elapsed());
     assert_eq!(bunny.triangles.len(), 40_000);
     assert_eq!(bunny.positions.len(), 20_002);
     let teapot = load_obj(&meshes.join("teapot_high.obj")).unwrap(); // CRLF line ends
@@ -490,7 +501,7 @@ fn triangle_mesh_paths_fans_and_sharing() {
             "TriangleMesh { obj_file quad.obj }",
             "TriangleMesh { obj_file ./quad.obj }",
             // Not next to the scene: found relative to the working directory (the package root).
-            "TriangleMesh { obj_file ../shared/mit6837/a2/cube.obj }",
+            "TriangleMesh { obj_file scenes/box.obj }",
             "}",
         ]),
     )
@@ -668,8 +679,7 @@ fn counts_are_exact_non_negative_integers() {
 }
 
 #[test]
-fn huge_count_then_end_of_file_is_a_quick_clean_error() {
-    let start = Instant::now();
+fn huge_count_then_end_of_file_is_a_clean_error() {
     for text in [
         format!("{CAMERA}\nGroup {{ numObjects 18446744073709551615"),
         format!("{CAMERA}\nLights {{ numLights 18446744073709551615\n"),
@@ -678,7 +688,6 @@ fn huge_count_then_end_of_file_is_a_quick_clean_error() {
         let error = parse_err(&text);
         assert!(error.message.starts_with("unexpected end of file, expected"), "{error}");
     }
-    assert!(start.elapsed().as_secs_f64() < 1.0);
 }
 
 #[test]
@@ -791,10 +800,9 @@ fn obj_file_errors() {
         with_header(&["Group { numObjects 1 MaterialIndex 0", &format!("  TriangleMesh {{ obj_file {path} }}"), "}"])
     };
     assert_error_at(&mesh("no_such_mesh.obj"), 5, 27, "obj_file `no_such_mesh.obj` not found");
-    let start = Instant::now();
+    // Refused before reading: /dev/zero would never end.
     assert_error_at(&mesh("/dev/zero"), 5, 27, "is not a regular file");
     assert_error_at(&mesh("/"), 5, 27, "is not a regular file");
-    assert!(start.elapsed().as_secs_f64() < 1.0);
     assert_error_at(&mesh("}"), 5, 27, "expected an OBJ file path, found `}`");
 
     // A bad face index is reported in the OBJ file, naming the index and the vertex count.
@@ -1021,9 +1029,9 @@ fn soup(words: Vec<&'static str>) -> String {
 }
 
 /// A course scene as words, to mutate.
-fn course_words() -> Vec<String> {
-    let text = std::fs::read_to_string(course_dir().join("scene2_14_axes_cube.txt")).unwrap();
-    text.split_whitespace().map(str::to_string).collect()
+fn course_words() -> Option<Vec<String>> {
+    let text = std::fs::read_to_string(course_dir()?.join("scene2_14_axes_cube.txt")).unwrap();
+    Some(text.split_whitespace().map(str::to_string).collect())
 }
 
 /// One edit of a word list: replace, insert or delete at a position (taken modulo the length).
@@ -1065,13 +1073,13 @@ proptest! {
 
     #[test]
     fn token_soups_never_panic(words in prop::collection::vec(prop::sample::select(VOCABULARY), 0..120)) {
-        let _ = parse_scene(&soup(words), &course_dir().join("soup.txt"));
+        let _ = parse_scene(&soup(words), &course_dir().unwrap_or_default().join("soup.txt"));
     }
 
     #[test]
     fn soups_after_a_valid_prefix_never_panic(words in prop::collection::vec(prop::sample::select(VOCABULARY), 0..80)) {
         let text = format!("{}\nGroup {{ numObjects 2 MaterialIndex 0 {}", with_header(&[]), soup(words));
-        let result = parse_scene(&text, &course_dir().join("soup.txt"));
+        let result = parse_scene(&text, &course_dir().unwrap_or_default().join("soup.txt"));
         if let Err(error) = result {
             prop_assert!(error.location.is_some() || error.message.contains("camera"));
         }
@@ -1079,11 +1087,11 @@ proptest! {
 
     #[test]
     fn mutated_course_scenes_never_panic(edits in prop::collection::vec(edit_strategy(), 1..4)) {
-        let mut words = course_words();
+        let Some(mut words) = course_words() else { return Ok(()) };
         for edit in &edits {
             apply(&mut words, edit);
         }
-        match parse_scene(&words.join(" "), &course_dir().join("mutated.txt")) {
+        match parse_scene(&words.join(" "), &course_dir().unwrap_or_default().join("mutated.txt")) {
             Ok(scene) => prop_assert!(orthonormal(scene.camera.frame())),
             Err(error) => prop_assert!(error.location.is_some() || error.message.contains("camera")),
         }
