@@ -4,7 +4,7 @@
 use glam::{DMat4, DVec3};
 use proptest::prelude::*;
 use raycaster::scene::{
-    load_obj, load_scene, parse_obj, parse_scene, Location, Object, Projection, Scene, SceneError, Shape, MAX_NESTING,
+    load_obj, load_scene, parse_obj, parse_scene, Location, Material, Object, Projection, Scene, SceneError, Shape, MAX_NESTING,
 };
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -362,11 +362,28 @@ fn lights_and_background_fields() {
 fn materials_default_colour_and_phong_warns_once() {
     let scene = parse(&format!(
         "{CAMERA} {LIGHTS} Materials {{ numMaterials 3 Material {{ }} \
-         PhongMaterial {{ diffuseColor 0.1 0.2 0.3 specularColor 1 1 1 exponent 20 reflectiveColor 0 0 0 \
-         transparentColor 0 0 0 indexOfRefraction 1.5 }} PhongMaterial {{ }} }}"
+         PhongMaterial {{ diffuseColor 0.1 0.2 0.3 specularColor 1 0.5 0.25 exponent 20 reflectiveColor 0.4 0 0 \
+         transparentColor 0 0.6 0 indexOfRefraction 1.5 }} PhongMaterial {{ }} }}"
     ));
-    let diffuse: Vec<DVec3> = scene.materials.iter().map(|m| m.diffuse).collect();
-    assert_eq!(diffuse, vec![DVec3::ONE, DVec3::new(0.1, 0.2, 0.3), DVec3::ONE]);
+    // Every term as written; what a file leaves out takes the course parser's defaults
+    // (GRAMMAR.md, A3 and A4): diffuse 1 1 1, exponent 1, index 1, the colours 0 0 0.
+    let defaults = Material {
+        diffuse: DVec3::ONE,
+        specular: DVec3::ZERO,
+        exponent: 1.0,
+        reflective: DVec3::ZERO,
+        transparent: DVec3::ZERO,
+        index_of_refraction: 1.0,
+    };
+    let phong = Material {
+        diffuse: DVec3::new(0.1, 0.2, 0.3),
+        specular: DVec3::new(1.0, 0.5, 0.25),
+        exponent: 20.0,
+        reflective: DVec3::new(0.4, 0.0, 0.0),
+        transparent: DVec3::new(0.0, 0.6, 0.0),
+        index_of_refraction: 1.5,
+    };
+    assert_eq!(scene.materials, vec![defaults, phong, defaults]);
     // One warning, at the first PhongMaterial (line 1, after the camera, lights and `Materials { numMaterials 3 Material { } `).
     let col = format!("{CAMERA} {LIGHTS} Materials {{ numMaterials 3 Material {{ }} ").chars().count() as u32 + 1;
     let messages: Vec<String> = scene.warnings.iter().map(|w| w.to_string()).collect();
