@@ -4,7 +4,8 @@
 use glam::{DMat4, DVec3};
 use proptest::prelude::*;
 use raycaster::scene::{
-    load_obj, load_scene, parse_obj, parse_scene, Location, Material, Object, Projection, Scene, SceneError, Shape, MAX_NESTING,
+    load_obj, load_scene, parse_obj, parse_scene, Location, Material, Object, Projection, Scene, SceneError, Shape,
+    MAX_NESTING,
 };
 use std::path::{Path, PathBuf};
 use std::sync::Arc;

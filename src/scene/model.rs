@@ -333,9 +333,9 @@ fn leaf_extent(shape: &Shape, to_world: Option<&DMat4>) -> Extent {
         Shape::Sphere { center, radius, .. } => match to_world {
             None => Bounds::sphere(*center, *radius),
             // The unit sphere carried by to_world · T(center) · S(radius).
-            Some(m) => Bounds::ellipsoid(
-                &(*m * DMat4::from_translation(*center) * DMat4::from_scale(DVec3::splat(*radius))),
-            ),
+            Some(m) => {
+                Bounds::ellipsoid(&(*m * DMat4::from_translation(*center) * DMat4::from_scale(DVec3::splat(*radius))))
+            }
         },
         Shape::Triangle { vertices, .. } => Bounds::of_points(vertices.map(map)),
         Shape::Mesh { mesh, .. } => Bounds::of_points(mesh.positions.iter().map(|&p| map(p))),

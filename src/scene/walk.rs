@@ -109,7 +109,10 @@ mod tests {
 
     #[test]
     fn the_first_error_stops_the_walk() {
-        let scene = parse("Sphere { center 0 0 0 radius 1 } Sphere { center 0 0 0 radius 2 } Sphere { center 0 0 0 radius 3 }", 3);
+        let scene = parse(
+            "Sphere { center 0 0 0 radius 1 } Sphere { center 0 0 0 radius 2 } Sphere { center 0 0 0 radius 3 }",
+            3,
+        );
         let mut visited = 0;
         let result = try_for_each_leaf(&scene.root, &DMat4::IDENTITY, &mut |leaf| {
             visited += 1;
