@@ -2,10 +2,11 @@
 
 mod app;
 
+use app::args::{BackendChoice, BenchArgs, Command, Habits, RenderArgs, Split, StitchArgs, Verbosity};
 use app::backend::Backend;
-use app::cli::{self, BackendChoice, Command, Habits, Outputs, RenderArgs, Verbosity};
 use app::exit::{self, note, say, Failure};
 use app::job::LineReport;
+use raycaster::render::Outputs;
 use raycaster::scene::SceneWarning;
 use std::process::ExitCode;
 
@@ -22,7 +23,8 @@ fn main() -> ExitCode {
 
 fn run() -> Result<(), Failure> {
     app::signals::clean_up_on_interrupt().map_err(|e| Failure::Failed(format!("cannot handle signals: {e}")))?;
-    let line = cli::parse_command_line(std::env::args_os().skip(1))?;
+    let line = app::cli::parse_command_line(std::env::args_os().skip(1))?;
+    app::validate::check(&line.command)?;
     let habits = line.habits;
     if let Some(threads) = habits.threads {
         // Before anything uses rayon: the reference's rows run on the global pool.
@@ -32,7 +34,7 @@ fn run() -> Result<(), Failure> {
             .map_err(|e| Failure::Failed(format!("--threads {threads}: {e}")))?;
     }
     match line.command {
-        Command::Help => exit::print(&format!("{}\n", cli::USAGE)),
+        Command::Help => exit::print(&format!("{}\n", app::flags::usage())),
         Command::Version => exit::print(&format!("raycaster {}\n", env!("CARGO_PKG_VERSION"))),
         Command::Render(args) => render(&args, habits),
         Command::Compare { args, outputs, max_diff_pixels } => compare(&args, outputs, max_diff_pixels, habits),
@@ -84,12 +86,7 @@ fn compare(args: &RenderArgs, outputs: Outputs, max_diff_pixels: Option<u64>, ha
     comparison.verdict(max_diff_pixels).map_err(Failure::Failed)
 }
 
-fn batch(
-    file: &std::path::Path,
-    choice: BackendChoice,
-    shard: Option<app::split::Split>,
-    habits: Habits,
-) -> Result<(), Failure> {
+fn batch(file: &std::path::Path, choice: BackendChoice, shard: Option<Split>, habits: Habits) -> Result<(), Failure> {
     let text = std::fs::read_to_string(file).map_err(|e| Failure::Failed(format!("{}: {e}", file.display())))?;
     let backend = open_backend(choice, habits)?;
     let located = |line: usize, report: &LineReport| format!("{}:{line}: {report}", file.display());
@@ -113,7 +110,7 @@ fn batch(
     if habits.verbosity == Verbosity::Verbose {
         notice(&[format!("backend: {}", backend.describe())]);
         notice(&timings);
-        notice(&[format!("memory: peak resident {:.0} MiB", app::bench::peak_memory_mib())]);
+        notice(&[format!("memory: peak resident {:.0} MiB", app::memory::peak_mib())]);
     }
     if count.failed > 0 {
         return Err(Failure::Failed(format!(
@@ -128,8 +125,8 @@ fn batch(
 
 /// `raycaster stitch`: every problem found is one line of its own; the last is the failure
 /// `main` reports.
-fn stitch(args: &cli::StitchArgs, habits: Habits) -> Result<(), Failure> {
-    let stitched = app::split::stitch(args).map_err(|app::split::Refusal(mut problems)| {
+fn stitch(args: &StitchArgs, habits: Habits) -> Result<(), Failure> {
+    let stitched = app::stitch::stitch(args).map_err(|app::stitch::Refusal(mut problems)| {
         let last = problems.pop().unwrap_or_default();
         for p in problems {
             say(&format!("stitch: {p}"));
@@ -142,7 +139,7 @@ fn stitch(args: &cli::StitchArgs, habits: Habits) -> Result<(), Failure> {
     Ok(())
 }
 
-fn bench(args: &cli::BenchArgs, habits: Habits) -> Result<(), Failure> {
+fn bench(args: &BenchArgs, habits: Habits) -> Result<(), Failure> {
     use app::bench;
     let gpu = open_gpu()?;
     let failed = |e: &dyn std::fmt::Display| Failure::Failed(format!("bench: {e}"));

@@ -2,7 +2,7 @@
 //! the 8-bit images after it. Used by the tests, `raycaster compare` and the benchmark.
 
 use crate::image_io::{color_image, depth_image, normals_image};
-use crate::render::Frame;
+use crate::render::{Frame, Output};
 use image::RgbImage;
 use std::fmt::Write as _;
 
@@ -33,30 +33,12 @@ pub fn image_diff(a: &RgbImage, b: &RgbImage) -> ImageDiff {
     diff
 }
 
-/// Which output an [`OutputErrors`] describes, and the unit of its float error.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Output {
-    /// Float error: absolute difference per colour channel (unclamped linear RGB).
-    Color,
-    /// Float error: angle between the normals, in radians, where both hit.
-    Normals,
-    /// Float error: |Δt| in world units where both hit; `relative_max` is max |Δt|/|t|.
-    Depth,
-}
-
-impl Output {
-    pub fn name(self) -> &'static str {
-        match self {
-            Output::Color => "colour",
-            Output::Normals => "normals",
-            Output::Depth => "depth",
-        }
-    }
-}
-
 /// The errors of one output of a tested frame against the reference.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct OutputErrors {
+    /// Which output, and so the unit of the float error: the absolute difference per colour
+    /// channel (unclamped linear RGB); the angle between the normals, in radians, where both
+    /// frames hit; |Δt| in world units where both hit (`relative_max` is max |Δt|/|t|).
     pub output: Output,
     pub image: ImageDiff,
     /// Pixels one frame hits and the other misses.

@@ -4,17 +4,89 @@
 //! be compared on the numbers themselves, and [`crate::image_io`] turns a frame into the
 //! 8-bit images of docs/SPEC.md §5 the same way for both.
 
+/// One of the images a render makes (docs/SPEC.md §5).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Output {
+    /// The diffuse-shaded colour (`-output`).
+    Color,
+    /// The world normal (`-normals`).
+    Normals,
+    /// The hit distance (`-depth`).
+    Depth,
+}
+
+impl Output {
+    /// In the order the kernel writes them, the metrics list them and the command line
+    /// names them.
+    pub const ALL: [Output; 3] = [Output::Color, Output::Normals, Output::Depth];
+
+    /// The name messages and tables use.
+    pub fn name(self) -> &'static str {
+        match self {
+            Output::Color => "colour",
+            Output::Normals => "normals",
+            Output::Depth => "depth",
+        }
+    }
+
+    fn bit(self) -> u8 {
+        1 << self as u8
+    }
+}
+
+/// A set of [`Output`]s: what a render computes, or what a command line names.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub struct Outputs(u8);
+
+impl Outputs {
+    pub const NONE: Outputs = Outputs(0);
+    pub const ALL: Outputs = Outputs(0b111);
+
+    pub fn contains(self, output: Output) -> bool {
+        self.0 & output.bit() != 0
+    }
+
+    pub fn with(self, output: Output) -> Outputs {
+        Outputs(self.0 | output.bit())
+    }
+
+    pub fn union(self, other: Outputs) -> Outputs {
+        Outputs(self.0 | other.0)
+    }
+
+    pub fn is_empty(self) -> bool {
+        self.0 == 0
+    }
+
+    pub fn len(self) -> usize {
+        self.0.count_ones() as usize
+    }
+
+    /// The members, in [`Output::ALL`]'s order.
+    pub fn iter(self) -> impl Iterator<Item = Output> {
+        Output::ALL.into_iter().filter(move |&o| self.contains(o))
+    }
+}
+
+impl From<Output> for Outputs {
+    fn from(output: Output) -> Outputs {
+        Outputs::NONE.with(output)
+    }
+}
+
+impl FromIterator<Output> for Outputs {
+    fn from_iter<I: IntoIterator<Item = Output>>(outputs: I) -> Outputs {
+        outputs.into_iter().fold(Outputs::NONE, Outputs::with)
+    }
+}
+
 /// Which images to produce and how (docs/SPEC.md §1).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RenderOptions {
     pub width: u32,
     pub height: u32,
-    /// Compute the diffuse-shaded colour (`-output`).
-    pub color: bool,
-    /// Compute the world normal (`-normals`).
-    pub normals: bool,
-    /// Compute the hit distance (`-depth`).
-    pub depth: bool,
+    /// The images to compute; the frame's other buffers stay empty.
+    pub outputs: Outputs,
     /// Shade back-facing hits as if they faced the viewer (`-shade_back`).
     pub shade_back: bool,
     /// The GPU kernel's ray/triangle algorithm (the reference always uses its f64 Cramer's rule).
@@ -75,9 +147,7 @@ impl RenderOptions {
         RenderOptions {
             width,
             height,
-            color: true,
-            normals: true,
-            depth: true,
+            outputs: Outputs::ALL,
             shade_back: false,
             triangle_test: TriangleTest::default(),
             sphere_test: SphereTest::default(),
@@ -120,13 +190,14 @@ impl Frame {
     /// A frame with buffers sized for what `options` asks for, every pixel a miss and zero.
     pub fn new(options: &RenderOptions) -> Frame {
         let n = options.pixel_count();
+        let wants = |output| options.outputs.contains(output);
         Frame {
             width: options.width,
             height: options.height,
             hit: vec![false; n],
-            color: if options.color { vec![[0.0; 3]; n] } else { Vec::new() },
-            normal: if options.normals { vec![[0.0; 3]; n] } else { Vec::new() },
-            depth: if options.depth { vec![0.0; n] } else { Vec::new() },
+            color: if wants(Output::Color) { vec![[0.0; 3]; n] } else { Vec::new() },
+            normal: if wants(Output::Normals) { vec![[0.0; 3]; n] } else { Vec::new() },
+            depth: if wants(Output::Depth) { vec![0.0; n] } else { Vec::new() },
         }
     }
 
@@ -137,24 +208,29 @@ impl Frame {
     /// If there are not exactly `options.pixel_count()` pixels.
     pub fn from_pixels(options: &RenderOptions, pixels: impl IntoIterator<Item = Pixel>) -> Frame {
         let n = options.pixel_count();
+        let (color, normals, depth) = (
+            options.outputs.contains(Output::Color),
+            options.outputs.contains(Output::Normals),
+            options.outputs.contains(Output::Depth),
+        );
         let capacity = |wanted: bool| if wanted { n } else { 0 };
         let mut frame = Frame {
             width: options.width,
             height: options.height,
             hit: Vec::with_capacity(n),
-            color: Vec::with_capacity(capacity(options.color)),
-            normal: Vec::with_capacity(capacity(options.normals)),
-            depth: Vec::with_capacity(capacity(options.depth)),
+            color: Vec::with_capacity(capacity(color)),
+            normal: Vec::with_capacity(capacity(normals)),
+            depth: Vec::with_capacity(capacity(depth)),
         };
         for pixel in pixels {
             frame.hit.push(pixel.hit);
-            if options.color {
+            if color {
                 frame.color.push(pixel.color);
             }
-            if options.normals {
+            if normals {
                 frame.normal.push(pixel.normal);
             }
-            if options.depth {
+            if depth {
                 frame.depth.push(pixel.depth);
             }
         }

@@ -4,30 +4,14 @@
 
 mod common;
 
+use common::bin::{file_names, path_str, raycaster, raycaster_in, raycaster_without_gpu, stderr};
 use std::path::Path;
 use std::process::{Command, Output};
-
-fn raycaster(args: &[&str]) -> Output {
-    raycaster_in(Path::new(env!("CARGO_MANIFEST_DIR")), args)
-}
-
-/// The binary run in `dir`.
-fn raycaster_in(dir: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_raycaster")).args(args).current_dir(dir).output().unwrap()
-}
 
 /// An 8×8 render of `scene` on the CPU, run in `dir`.
 fn cpu_render_in(dir: &Path, scene: &Path, outputs: &[&str]) -> Output {
     let args = [&["-input", path_str(scene), "-size", "8", "8", "--backend", "cpu"], outputs].concat();
     raycaster_in(dir, &args)
-}
-
-fn stderr(output: &Output) -> String {
-    String::from_utf8_lossy(&output.stderr).into_owned()
-}
-
-fn path_str(p: &Path) -> &str {
-    p.to_str().unwrap()
 }
 
 /// The README's first command: a scene of ours rendered from the project root.
@@ -81,11 +65,10 @@ fn mesh_paths_resolve_from_the_scene_folder() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("o.tga");
     let scene = common::scenes_dir().join("mesh_octahedron.txt");
-    let result = Command::new(env!("CARGO_BIN_EXE_raycaster"))
-        .args(["-input", path_str(&scene), "-size", "20", "20", "-output", "o.tga", "--backend", "cpu"])
-        .current_dir(dir.path())
-        .output()
-        .unwrap();
+    let result = raycaster_in(
+        dir.path(),
+        &["-input", path_str(&scene), "-size", "20", "20", "-output", "o.tga", "--backend", "cpu"],
+    );
     assert!(result.status.success(), "{}", stderr(&result));
     assert!(out.exists());
 }
@@ -163,7 +146,7 @@ fn no_image_is_written_when_another_fails() {
     assert_eq!(result.status.code(), Some(1), "{message}");
     assert!(message.contains("missing-folder"), "{message}");
     assert!(!good.exists(), "the first image was written although the second failed");
-    let leftovers: Vec<_> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
+    let leftovers = file_names(dir.path());
     assert!(leftovers.is_empty(), "temporary files left behind: {leftovers:?}");
 }
 
@@ -175,24 +158,17 @@ fn without_an_adapter_gpu_fails_and_auto_falls_back() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("o.tga");
     let run = |backend: &str| {
-        Command::new(env!("CARGO_BIN_EXE_raycaster"))
-            .args([
-                "-input",
-                "scenes/spheres_ortho.txt",
-                "-size",
-                "1500",
-                "1500",
-                "-output",
-                path_str(&out),
-                "--backend",
-                backend,
-            ])
-            .current_dir(env!("CARGO_MANIFEST_DIR"))
-            .env("VK_DRIVER_FILES", "/nonexistent/icd.json")
-            .env("VK_ICD_FILENAMES", "/nonexistent/icd.json")
-            .env("WGPU_BACKEND", "vulkan")
-            .output()
-            .unwrap()
+        raycaster_without_gpu(&[
+            "-input",
+            "scenes/spheres_ortho.txt",
+            "-size",
+            "1500",
+            "1500",
+            "-output",
+            path_str(&out),
+            "--backend",
+            backend,
+        ])
     };
     let gpu = run("gpu");
     assert_eq!(gpu.status.code(), Some(1), "{}", stderr(&gpu));
@@ -211,25 +187,18 @@ fn without_an_adapter_gpu_fails_and_auto_falls_back() {
 fn auto_renders_small_jobs_with_the_reference_without_opening_the_gpu() {
     let dir = tempfile::tempdir().unwrap();
     let run = |backend: &str, size: &str, out: &str| {
-        Command::new(env!("CARGO_BIN_EXE_raycaster"))
-            .args([
-                "-input",
-                "scenes/spheres_ortho.txt",
-                "-size",
-                size,
-                size,
-                "-output",
-                out,
-                "--backend",
-                backend,
-                "-v",
-            ])
-            .current_dir(env!("CARGO_MANIFEST_DIR"))
-            .env("VK_DRIVER_FILES", "/nonexistent/icd.json")
-            .env("VK_ICD_FILENAMES", "/nonexistent/icd.json")
-            .env("WGPU_BACKEND", "vulkan")
-            .output()
-            .unwrap()
+        raycaster_without_gpu(&[
+            "-input",
+            "scenes/spheres_ortho.txt",
+            "-size",
+            size,
+            size,
+            "-output",
+            out,
+            "--backend",
+            backend,
+            "-v",
+        ])
     };
     let auto = dir.path().join("auto.tga");
     let cpu = dir.path().join("cpu.tga");
@@ -363,7 +332,7 @@ fn compare_fails_by_default_beyond_the_parity_limit() {
         stderr(&limited)
     );
 
-    let written: Vec<_> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
+    let written = file_names(dir.path());
     assert!(written.is_empty(), "compare wrote {written:?}");
 }
 
@@ -530,7 +499,7 @@ fn an_interrupted_render_leaves_nothing_behind() {
             let what = format!("{name}, batch {batch}: {}", stderr(&result));
             assert_eq!(result.status.code(), Some(status), "{what}");
             assert_eq!(stderr(&result), format!("raycaster: interrupted by {name}\n"), "{what}");
-            let left: Vec<_> = std::fs::read_dir(out.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
+            let left = file_names(out.path());
             assert!(left.is_empty(), "{what}: left behind {left:?}");
         }
     }

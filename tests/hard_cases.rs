@@ -6,8 +6,8 @@
 mod common;
 
 use common::hard::load_hard_ok;
-use raycaster::metrics::{compare_frames, image_diff, Output};
-use raycaster::render::{Frame, RenderOptions, SphereTest, TriangleTest};
+use raycaster::metrics::{compare_frames, image_diff};
+use raycaster::render::{Frame, Output, RenderOptions, SphereTest, TriangleTest};
 use raycaster::scene::Scene;
 
 /// The kernel variants every case runs with: the default first.

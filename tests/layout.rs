@@ -8,7 +8,7 @@ use raycaster::gpu::layout::{
 };
 use raycaster::gpu::SHADER_SOURCE;
 use raycaster::gpu::{KernelConfig, BINDINGS};
-use raycaster::render::{SphereTest, TriangleTest};
+use raycaster::render::{Outputs, SphereTest, TriangleTest};
 use std::mem::{offset_of, size_of};
 
 fn module() -> naga::Module {
@@ -196,7 +196,7 @@ fn override_constants_match_the_host() {
         has_planes: true,
         has_triangles: true,
         orthographic: false,
-        pixel_layout: PixelLayout { color: true, normal: true, depth: true, packed: false },
+        pixel_layout: PixelLayout { outputs: Outputs::ALL, packed: false },
         num_lights: 1,
         shade_back: false,
         triangle_test: TriangleTest::Watertight,

@@ -7,13 +7,13 @@
 
 mod common;
 
+use common::bin::raycaster;
 use raycaster::gpu::{precision, GpuError};
 use raycaster::image_io::{color_image, depth_image, normals_image};
 use raycaster::metrics::{compare_frames, depth_range_of, image_diff};
 use raycaster::render::RenderOptions;
 use raycaster::scene::{load_scene, Location};
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 const SIZE: u32 = 48;
 
@@ -322,10 +322,6 @@ fn every_project_and_course_scene_is_in_range() {
         checked += 1;
     }
     assert!(checked >= 40, "only {checked} scenes checked");
-}
-
-fn raycaster(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_raycaster")).args(args).output().unwrap()
 }
 
 /// `--backend gpu` refuses with the located one-line error and exit status 1, writing

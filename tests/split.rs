@@ -4,48 +4,10 @@
 
 mod common;
 
+use common::bin::{channel, check, raycaster, raycaster_in, raycaster_owned, read_exr, scene, stderr};
 use raycaster::render::RenderOptions;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn raycaster_in(dir: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_raycaster")).args(args).current_dir(dir).output().unwrap()
-}
-
-fn raycaster(args: &[&str]) -> Output {
-    raycaster_in(Path::new(env!("CARGO_MANIFEST_DIR")), args)
-}
-
-fn check(output: Output) -> Output {
-    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
-    output
-}
-
-fn stderr(output: &Output) -> String {
-    String::from_utf8_lossy(&output.stderr).into_owned()
-}
-
-fn scene(name: &str) -> String {
-    common::scenes_dir().join(name).to_str().unwrap().to_string()
-}
-
-/// A float EXR read back with the `exr` crate: `(channel name, samples)` in file order.
-fn read_exr(path: &Path) -> (usize, usize, Vec<(String, Vec<f32>)>) {
-    let image = exr::prelude::read_first_flat_layer_from_file(path).unwrap();
-    let size = image.layer_data.size;
-    let channels = image
-        .layer_data
-        .channel_data
-        .list
-        .iter()
-        .map(|c| (c.name.to_string(), c.sample_data.values_as_f32().collect()))
-        .collect();
-    (size.0, size.1, channels)
-}
-
-fn channel<'a>(channels: &'a [(String, Vec<f32>)], name: &str) -> &'a [f32] {
-    &channels.iter().find(|(n, _)| n == name).unwrap_or_else(|| panic!("no channel {name}")).1
-}
+use std::process::Output;
 
 /// The 23-row test image splits into bands of 7, 8 and 8 rows (⌊K·23/3⌋ = 0, 7, 15, 23).
 const W: u32 = 41;
@@ -191,7 +153,7 @@ fn split_equals_single(scene_name: &str, backend: &str, names: [&str; 3], n: u32
         let mut args: Vec<String> = common_flags.iter().map(|s| s.to_string()).collect();
         args.extend(output_flags(dir, names));
         args.extend(extra.iter().map(|s| s.to_string()));
-        check(raycaster(&args.iter().map(String::as_str).collect::<Vec<_>>()))
+        check(raycaster_owned(&args))
     };
     run(&whole, &[]);
     for k in 0..n {
@@ -208,12 +170,12 @@ fn split_equals_single(scene_name: &str, backend: &str, names: [&str; 3], n: u32
     let mut args = vec!["stitch".to_string()];
     args.extend(output_flags(&split, names));
     args.extend(["-input", &input, "-size", &size[0], &size[1]].map(String::from));
-    check(raycaster(&args.iter().map(String::as_str).collect::<Vec<_>>()));
+    check(raycaster_owned(&args));
     for name in names {
         let (a, b) = (std::fs::read(whole.join(name)).unwrap(), std::fs::read(split.join(name)).unwrap());
         assert!(a == b, "{name}: stitched file differs from the single render ({} vs {} bytes)", b.len(), a.len());
     }
-    let left: Vec<_> = std::fs::read_dir(&split).unwrap().map(|e| e.unwrap().file_name()).collect();
+    let left = common::bin::file_names(&split);
     assert_eq!(left.len(), 3, "parts are deleted after a successful stitch: {left:?}");
 }
 
@@ -254,7 +216,7 @@ fn render_parts(dir: &Path, n: u32, odd: Option<(u32, &[&str])>) {
         if let Some((_, extra)) = odd.filter(|(band, _)| *band == k) {
             args.extend(extra.iter().map(|s| s.to_string()));
         }
-        check(raycaster(&args.iter().map(String::as_str).collect::<Vec<_>>()));
+        check(raycaster_owned(&args));
     }
 }
 
@@ -307,7 +269,7 @@ fn stitch_refuses_a_part_from_another_render() {
             .to_vec();
     let out = dir.path().join("c.tga");
     args.extend(["-output", out.to_str().unwrap(), "--tile", "2/3"].map(String::from));
-    check(raycaster(&args.iter().map(String::as_str).collect::<Vec<_>>()));
+    check(raycaster_owned(&args));
     assert_refused(&stitch(dir.path(), &[]), dir.path(), &["c.tga.part-2-of-3", "another render", "scene"]);
 
     // A stale part of a 2-way split beside a complete 3-way one.

@@ -4,7 +4,7 @@ mod common;
 
 use raycaster::gpu::GpuOptions;
 use raycaster::image_io::{color_image, read_image, ImageFile};
-use raycaster::render::RenderOptions;
+use raycaster::render::{Output, RenderOptions};
 use raycaster::scene::load_scene;
 
 fn scene() -> raycaster::scene::Scene {
@@ -81,17 +81,18 @@ fn every_output_combination_decodes_the_same() {
     let Some(gpu) = common::gpu() else { return };
     let all = gpu.render(&scene(), &RenderOptions::all(24, 16)).unwrap();
     for mask in 1..8u32 {
-        let options = RenderOptions {
-            color: mask & 1 != 0,
-            normals: mask & 2 != 0,
-            depth: mask & 4 != 0,
-            ..RenderOptions::all(24, 16)
-        };
+        let outputs = Output::ALL.into_iter().enumerate().filter(|(k, _)| mask & 1 << k != 0).map(|(_, o)| o).collect();
+        let options = RenderOptions { outputs, ..RenderOptions::all(24, 16) };
+        let wants = |output| options.outputs.contains(output);
         let frame = gpu.render(&scene(), &options).unwrap();
         assert_eq!(frame.hit, all.hit, "outputs {mask:03b}");
-        assert_eq!(frame.color, if options.color { all.color.clone() } else { vec![] }, "outputs {mask:03b}");
-        assert_eq!(frame.normal, if options.normals { all.normal.clone() } else { vec![] }, "outputs {mask:03b}");
-        assert_eq!(frame.depth, if options.depth { all.depth.clone() } else { vec![] }, "outputs {mask:03b}");
+        assert_eq!(frame.color, if wants(Output::Color) { all.color.clone() } else { vec![] }, "outputs {mask:03b}");
+        assert_eq!(
+            frame.normal,
+            if wants(Output::Normals) { all.normal.clone() } else { vec![] },
+            "outputs {mask:03b}"
+        );
+        assert_eq!(frame.depth, if wants(Output::Depth) { all.depth.clone() } else { vec![] }, "outputs {mask:03b}");
     }
 }
 

@@ -1,11 +1,10 @@
 //! Choosing and calling a renderer: the GPU kernel or the f64 CPU reference.
 
-use crate::app::cli::BackendChoice;
-use crate::app::output::Kind;
+use crate::app::args::BackendChoice;
 use raycaster::cpu::Reference;
 use raycaster::gpu::{GpuError, GpuRenderer, RenderStats};
 use raycaster::image_io;
-use raycaster::render::{row_tiles, Frame, RenderOptions};
+use raycaster::render::{row_tiles, Frame, Output, RenderOptions};
 use raycaster::scene::Scene;
 
 /// About how many pixels the CPU reference renders per tile: enough rows to keep every core
@@ -93,11 +92,12 @@ impl Backend {
         mut on_tile: impl FnMut(u32, ImageRows) -> Result<(), E>,
     ) -> Result<(RenderStats, Option<String>), E> {
         let (min, max) = depth_range;
+        let wants = |output| options.outputs.contains(output);
         let from_frame = |frame: &Frame| ImageRows {
             rows: frame.height,
-            color: options.color.then(|| image_io::color_image(frame).into_raw()),
-            normals: options.normals.then(|| image_io::normals_image(frame).into_raw()),
-            depth: options.depth.then(|| image_io::depth_image(frame, min, max).into_raw()),
+            color: wants(Output::Color).then(|| image_io::color_image(frame).into_raw()),
+            normals: wants(Output::Normals).then(|| image_io::normals_image(frame).into_raw()),
+            depth: wants(Output::Depth).then(|| image_io::depth_image(frame, min, max).into_raw()),
         };
         match self {
             Backend::Gpu(gpu, fallback) => or_reference(
@@ -107,9 +107,9 @@ impl Backend {
                     gpu.prepare(scene, options, true)?.render_band(first, rows, |tile| {
                         let rows = ImageRows {
                             rows: tile.rows,
-                            color: options.color.then(|| tile.color_rgb()),
-                            normals: options.normals.then(|| tile.normals_rgb()),
-                            depth: options.depth.then(|| tile.depth_rgb(min, max)),
+                            color: wants(Output::Color).then(|| tile.color_rgb()),
+                            normals: wants(Output::Normals).then(|| tile.normals_rgb()),
+                            depth: wants(Output::Depth).then(|| tile.depth_rgb(min, max)),
                         };
                         on_tile(tile.first_row, rows).map_err(Attempt::Tile)
                     })
@@ -198,12 +198,12 @@ pub struct ImageRows {
 }
 
 impl ImageRows {
-    /// The rows of the image of `kind`, once (each kind is asked for at most once).
-    pub fn take(&mut self, kind: Kind) -> Vec<u8> {
-        let rows = match kind {
-            Kind::Color => &mut self.color,
-            Kind::Normals => &mut self.normals,
-            Kind::Depth { .. } => &mut self.depth,
+    /// The rows of `output`'s image, once (each output is asked for at most once).
+    pub fn take(&mut self, output: Output) -> Vec<u8> {
+        let rows = match output {
+            Output::Color => &mut self.color,
+            Output::Normals => &mut self.normals,
+            Output::Depth => &mut self.depth,
         };
         rows.take().expect("the render computed every output asked for")
     }

@@ -7,11 +7,12 @@
 //! too slow. The result is printed as Markdown, saved as CSV and drawn as a speed-against-error
 //! plot.
 
+use crate::app::memory;
 use glam::DVec3;
 use raycaster::cpu::Reference;
 use raycaster::gpu::{Acceleration, GpuError, GpuOptions, GpuRenderer};
-use raycaster::metrics::{compare_frames, depth_range_of, Output, OutputErrors};
-use raycaster::render::{Frame, Pixel, RenderOptions, TriangleTest};
+use raycaster::metrics::{compare_frames, depth_range_of, OutputErrors};
+use raycaster::render::{Frame, Output, Pixel, RenderOptions, TriangleTest};
 use raycaster::scene::{
     self, Background, Bounds, Camera, DirectionalLight, Material, Mesh, Object, Projection, Scene, Shape,
 };
@@ -112,7 +113,7 @@ pub fn run_case(gpu: &GpuRenderer, case: &Case, runs: usize) -> Result<Row, GpuE
     let gpu = &gpu.on_same_device(GpuOptions { acceleration: case.acceleration, ..*gpu.options() });
     let counts = case.scene.primitive_counts();
     let sampler = Sampler::new(options.width, options.height, sample_budget(counts.triangles));
-    reset_peak_memory();
+    memory::reset_peak();
     let mut kernel = Vec::new();
     let mut wall = Vec::new();
     let mut timestamps = false;
@@ -136,7 +137,7 @@ pub fn run_case(gpu: &GpuRenderer, case: &Case, runs: usize) -> Result<Row, GpuE
         scene_bytes = stats.scene_bytes;
         kernel.push(stats.kernel_ns.map_or(elapsed, |ns| ns as f64 / 1e6));
     }
-    let peak_mib = peak_memory_mib();
+    let peak_mib = memory::peak_mib();
     let positions: Vec<(u32, u32)> = gpu_samples.iter().map(|s: &Sample| s.position).collect();
     let reference = Reference::new(&case.scene, &options).pixels(&positions);
     let ours = samples_frame(&options, &gpu_samples);
@@ -218,21 +219,6 @@ fn median(values: &mut [f64]) -> f64 {
     } else {
         (values[n / 2 - 1] + values[n / 2]) / 2.0
     }
-}
-
-/// Linux: writing 5 to clear_refs resets the peak resident set size (VmHWM).
-fn reset_peak_memory() {
-    let _ = std::fs::write("/proc/self/clear_refs", "5");
-}
-
-/// The peak resident memory of the process so far (Linux; 0 elsewhere).
-pub fn peak_memory_mib() -> f64 {
-    let status = std::fs::read_to_string("/proc/self/status").unwrap_or_default();
-    status
-        .lines()
-        .find_map(|l| l.strip_prefix("VmHWM:"))
-        .and_then(|v| v.trim().trim_end_matches("kB").trim().parse::<f64>().ok())
-        .map_or(0.0, |kib| kib / 1024.0)
 }
 
 /// A scene that frames `mesh`: a perspective camera in front of its bounding box (+z side),

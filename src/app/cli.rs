@@ -1,189 +1,19 @@
-//! Command-line arguments (docs/SPEC.md §1). The course's single-dash spellings (`-input`,
+//! Parsing the command line (docs/SPEC.md §1). The course's single-dash spellings (`-input`,
 //! `-shade_back`) and double-dash ones (`--input`, `--shade-back`) are the same flags, in any
-//! order. Errors are one line naming the flag; the binary exits with status 2 on them.
+//! order. One loop reads every command's arguments: it looks each flag up in
+//! [`flags::FLAGS`], reads the value the table says it takes and hands it to the flag's
+//! setter; then the command is assembled from what was given. Parsing looks at the words
+//! only; what depends on the file system is [`crate::app::validate`]'s, afterwards. Errors
+//! are one line naming the flag; the binary exits with status 2 on them.
 
-use crate::app::split::Split;
-use raycaster::image_io::ImageFormat;
-use raycaster::render::{SphereTest, TriangleTest};
+use crate::app::args::{
+    BenchArgs, Command, CommandLine, DepthArgs, Habits, RenderArgs, Split, StitchArgs, UsageError, Verbosity,
+    MAX_PIXELS, MAX_SIDE,
+};
+use crate::app::flags::{self, flag_name, Answer, Flag, Given, Takes, Verb};
+use raycaster::render::{Output, Outputs};
 use std::ffi::OsString;
-use std::fmt;
-use std::path::{Path, PathBuf};
-
-/// The largest image side: TGA stores sizes in 16 bits.
-pub const MAX_SIDE: u32 = 65535;
-/// The largest image, in pixels (16384²).
-pub const MAX_PIXELS: u64 = 1 << 28;
-
-pub const USAGE: &str = "\
-raycaster: render an MIT 6.837 scene file on the GPU (wgpu) or with the f64 CPU reference
-
-Usage: raycaster [compare] -input SCENE -size W H [-output FILE] [-normals FILE]
-                 [-depth MIN MAX FILE] [-shade_back] [--backend gpu|cpu|auto]
-                 [--triangle-test cramer|moller|watertight] [--sphere-test naive|robust]
-                 [--tile K/N] [-q | -v] [--threads N]
-
-  -input FILE            scene file (obj_file paths resolve from its folder)
-  -size W H              image size in pixels
-  -output FILE           diffuse-shaded image (.tga or .png; .exr: linear, unclamped)
-  -normals FILE          normal visualisation |N| (.tga or .png; .exr: the signed normal)
-  -depth MIN MAX FILE    depth visualisation, white at MIN, black at MAX (.tga or .png;
-                         .exr: the distance t itself, +inf where nothing is hit; MIN and
-                         MAX are then not used)
-  -shade_back            shade back-facing hits as if they faced the viewer
-  --backend B            gpu, cpu (the f64 reference) or auto (default: the GPU if one is
-                         found, else the CPU with a notice)
-  --triangle-test T      the GPU's ray/triangle test (default watertight)
-  --sphere-test S        the GPU's ray/sphere test (default robust)
-  --tile K/N             render only band K (0-based, from the top) of N bands of rows
-                         and write FILE.part-K-of-N beside each output; see stitch
-  -q, --quiet            errors only: no warnings, notices or progress bar
-  -v, --verbose          also the adapter, the kernel variant, where the time went and
-                         the peak memory
-  --threads N            threads of the CPU reference (default: one per core)
-  -h, --help             this text
-  -V, --version          the version
-
-raycaster stitch [-output FILE] [-normals FILE] [-depth MIN MAX FILE] [-input SCENE]
-                 [-size W H] [--keep-parts]
-  Assembles the part files of a --tile render into the images a single render writes,
-  byte for byte. Refuses, naming them, when parts are missing or come from different
-  renders (or from another scene or size than -input/-size say). Deletes the parts once
-  the images are written, unless --keep-parts.
-
-raycaster batch FILE [--backend B] [--shard K/N]
-  Runs every line of FILE as a render command line (the course's commands.txt works as it
-  is: arguments without the program name, paths relative to the working directory, split at
-  spaces), in one process with one GPU device. Blank lines and lines starting with # are
-  skipped. A failing line is reported with its number and the rest still run; the exit
-  status is then 1. --shard K/N: run only the command lines whose index (0-based,
-  counting command lines only, not blank or comment lines) is K modulo N. -q, -v and
-  --threads belong on batch's own command line (on a line of FILE they are ignored).
-
-raycaster bench [--quick] [--runs N] [--out DIR] [--corpus DIR] [--only NAME]
-  Times the GPU kernel on the course scenes, larger meshes and image sizes, with the error
-  against the f64 reference for each row; prints a Markdown table and writes DIR/bench.csv
-  and DIR/bench.png (default DIR target/bench, 5 runs; the course's files are read from
-  --corpus, else $RAYCASTER_CORPUS, else ../shared/mit6837 beside the source checkout).
-  --quick: a few small cases, seconds in all. --only: the cases whose name contains NAME.
-
-raycaster compare -input SCENE -size W H --outputs color,normals,depth [--max-diff-pixels N]
-  Renders the outputs listed (or named by -output, -normals, -depth, whose files are not
-  written) with the GPU and with the f64 reference, and prints their differences per
-  output: pixels more than 1 level apart, hit/miss disagreements, depth and normal errors,
-  NaN/inf counts. Exits 1 when an output has more than 0.1 % of its pixels (or N pixels)
-  more than 1 level off, or the GPU produced NaN or infinity. Takes the kernel flags and
-  -shade_back; not --backend (it always runs both).
-
-Flags take one or two dashes; `-shade_back` and `--shade-back` are the same. A flag with
-one value also takes it after '=' (--backend=cpu); -size and -depth take theirs after spaces.
--q, -v and --threads apply to every command. At least one of -output, -normals, -depth is
-required. On a terminal, work that lasts more than a second shows a progress bar on stderr.";
-
-/// Which renderer to use.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
-pub enum BackendChoice {
-    Gpu,
-    Cpu,
-    #[default]
-    Auto,
-}
-
-/// A render as the command line asks for it.
-#[derive(Clone, Debug, PartialEq)]
-pub struct RenderArgs {
-    pub input: PathBuf,
-    pub width: u32,
-    pub height: u32,
-    pub output: Option<PathBuf>,
-    pub normals: Option<PathBuf>,
-    pub depth: Option<DepthArgs>,
-    pub shade_back: bool,
-    pub backend: BackendChoice,
-    pub triangle_test: TriangleTest,
-    pub sphere_test: SphereTest,
-    /// `--tile K/N`: render band K of N and write part files (see [`crate::app::split`]).
-    pub tile: Option<Split>,
-}
-
-#[derive(Clone, Debug, PartialEq)]
-pub struct DepthArgs {
-    pub min: f32,
-    pub max: f32,
-    pub path: PathBuf,
-}
-
-#[derive(Clone, Debug, PartialEq)]
-pub enum Command {
-    Render(RenderArgs),
-    /// `raycaster compare`: GPU against the reference, nothing written. `args`' file names
-    /// only say which outputs to compare; `outputs` is the union of them and `--outputs`.
-    Compare {
-        args: RenderArgs,
-        outputs: Outputs,
-        max_diff_pixels: Option<u64>,
-    },
-    /// `raycaster batch FILE`: one render command line per line of FILE, in one process.
-    Batch {
-        file: PathBuf,
-        backend: BackendChoice,
-        /// `--shard K/N`: only the command lines whose index is K modulo N.
-        shard: Option<Split>,
-    },
-    /// `raycaster stitch`: assemble the part files of a split render.
-    Stitch(StitchArgs),
-    /// `raycaster bench`: speed and error per scene and size.
-    Bench(BenchArgs),
-    Help,
-    /// `--version`, `-V`.
-    Version,
-}
-
-/// Which images to compute.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct Outputs {
-    pub color: bool,
-    pub normals: bool,
-    pub depth: bool,
-}
-
-#[derive(Clone, Debug, PartialEq)]
-pub struct BenchArgs {
-    /// A few small cases that take seconds (what CI runs).
-    pub quick: bool,
-    /// Renders per case (medians are reported).
-    pub runs: usize,
-    /// Where the CSV and the plot go.
-    pub out: PathBuf,
-    /// The course corpus (`a2/`, `meshes/`).
-    pub corpus: PathBuf,
-    /// Only the cases whose name contains this.
-    pub only: Option<String>,
-}
-
-/// `raycaster stitch`: the render's output flags, and what to check the parts against.
-#[derive(Clone, Debug, PartialEq)]
-pub struct StitchArgs {
-    pub output: Option<PathBuf>,
-    pub normals: Option<PathBuf>,
-    pub depth: Option<DepthArgs>,
-    /// Checked against the parts' scene hash when given.
-    pub input: Option<PathBuf>,
-    /// Checked against the parts' size when given.
-    pub size: Option<(u32, u32)>,
-    pub keep_parts: bool,
-}
-
-/// A bad command line, as one line of text.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct UsageError(pub String);
-
-impl fmt::Display for UsageError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{} (try --help)", self.0)
-    }
-}
-
-impl std::error::Error for UsageError {}
+use std::path::PathBuf;
 
 /// Parses the arguments after the program name. The flags every command shares (`-q`, `-v`,
 /// `--threads`) are accepted and dropped: a batch line uses this, and those flags belong to
@@ -203,288 +33,137 @@ where
     S: Into<OsString>,
 {
     let args: Vec<OsString> = args.into_iter().map(Into::into).collect();
-    let mut habits = Habits::default();
-    let command = if args.first().is_some_and(|a| a == "batch") {
-        parse_batch(&args[1..], &mut habits)
-    } else if args.first().is_some_and(|a| a == "bench") {
-        parse_bench(&args[1..], &mut habits)
-    } else if args.first().is_some_and(|a| a == "stitch") {
-        parse_stitch(&args[1..], &mut habits)
-    } else {
-        parse_render(&args, &mut habits)
-    }?;
-    Ok(CommandLine { command, habits })
-}
-
-/// A render or `compare` command line.
-fn parse_render(args: &[OsString], habits: &mut Habits) -> Result<Command, UsageError> {
-    let compare = args.first().is_some_and(|a| a == "compare");
-    let mut values = Values::new(args, usize::from(compare));
-    let mut max_diff_pixels = None;
-    let mut listed_outputs = None;
-    let mut triangle_test = TriangleTest::default();
-    let mut sphere_test = SphereTest::default();
-    let mut input = None;
-    let mut size = None;
-    let (mut output, mut normals, mut depth) = (None, None, None);
-    let mut shade_back = false;
-    let mut backend = BackendChoice::Auto;
-    let mut tile = None;
+    let verb = Verb::of_first(args.first().and_then(|a| a.to_str()));
+    let mut values = Values::new(&args, usize::from(verb != Verb::Render));
+    let mut given = Given::default();
+    let mut verbosity = Verbosity::Normal;
+    let mut seen: Vec<&str> = Vec::new();
+    let mut operand = None;
     while let Some(raw) = values.next_flag() {
         let text = raw.to_string_lossy().into_owned();
-        let Some(flag) = flag_name(&text) else {
-            return Err(unexpected_argument(&text, values.next == 1));
+        let Some(name) = flag_name(&text) else {
+            operand = Some(take_operand(verb, raw, &text, operand.is_some(), values.next == 1)?);
+            continue;
         };
-        let set_once = |seen: bool| if seen { Err(UsageError(format!("{text} is given twice"))) } else { Ok(()) };
-        match flag.as_str() {
-            "h" | "help" => return Ok(Command::Help),
-            "V" | "version" => return Ok(Command::Version),
-            shared if Habits::takes(shared) => habits.accept(shared, &text, &mut values)?,
-            "input" => {
-                set_once(input.is_some())?;
-                input = Some(values.path(&text)?);
+        let flag = flag_for(verb, &name, &text)?;
+        if flag.once && seen.contains(&flag.name) {
+            return Err(UsageError(format!("{text} is given twice")));
+        }
+        seen.push(flag.name);
+        match &flag.takes {
+            Takes::Answer(answer) => return Ok(CommandLine { command: answered(*answer), habits: Habits::default() }),
+            Takes::Verbosity(v) if verbosity != Verbosity::Normal && verbosity != *v => {
+                return Err(UsageError(format!("{text}: -q and -v cannot be given together")));
             }
-            "size" => {
-                set_once(size.is_some())?;
-                size = Some(values.size(&text)?);
-            }
-            "output" => {
-                set_once(output.is_some())?;
-                output = Some(values.image_path(&text)?);
-            }
-            "normals" => {
-                set_once(normals.is_some())?;
-                normals = Some(values.image_path(&text)?);
-            }
-            "depth" => {
-                set_once(depth.is_some())?;
-                depth = Some(values.depth(&text)?);
-            }
-            "shade_back" => shade_back = true,
-            "backend" if compare => return Err(not_for_compare(&text)),
-            "backend" => backend = values.backend(&text)?,
-            "outputs" if compare => {
-                set_once(listed_outputs.is_some())?;
-                listed_outputs = Some(values.outputs(&text)?);
-            }
-            "triangle_test" => triangle_test = values.choice(&text, &TriangleTest::ALL.map(|t| (t.name(), t)))?,
-            "sphere_test" => sphere_test = values.choice(&text, &SphereTest::ALL.map(|t| (t.name(), t)))?,
-            "tile" if !compare => tile = Some(values.split(&text)?),
-            "max_diff_pixels" if compare => {
-                let value = values.take(&text, "a number of pixels")?;
-                let text_value = value.to_string_lossy();
-                max_diff_pixels = Some(
-                    text_value
-                        .parse::<u64>()
-                        .map_err(|_| UsageError(format!("{text}: '{text_value}' is not a whole number of pixels")))?,
-                );
-            }
-            _ => {
-                let mut known = RENDER_FLAGS.to_vec();
-                if compare {
-                    known.retain(|&k| k != "backend" && k != "tile");
-                    known.extend(["outputs", "max_diff_pixels"]);
-                }
-                return Err(unknown_flag("", &text, &known));
-            }
+            Takes::Verbosity(v) => verbosity = *v,
+            _ => values.read(flag, &text, &mut given)?,
         }
         values.no_value_left(&text)?;
     }
-    let input = input.ok_or_else(|| UsageError("-input SCENE is required".into()))?;
-    let (width, height) = size.ok_or_else(|| UsageError("-size W H is required".into()))?;
-    if let Some(t) = tile.filter(|t: &Split| t.count > height) {
+    let habits = Habits { verbosity, threads: given.threads };
+    Ok(CommandLine { command: assemble(verb, given, operand, &seen)?, habits })
+}
+
+/// The flag of `verb` named `name` (typed as `text`), or why there is none.
+fn flag_for(verb: Verb, name: &str, text: &str) -> Result<&'static Flag, UsageError> {
+    match Flag::find(name) {
+        Some(flag) if flag.verbs.contains(verb) => Ok(flag),
+        Some(Flag { refused: Some((refuser, why)), .. }) if *refuser == verb => {
+            Err(UsageError(format!("{}: {text} does not apply: {why}", verb.name())))
+        }
+        _ => Err(flags::unknown_flag(verb, text)),
+    }
+}
+
+/// An argument that is not a flag: batch's file, and an error anywhere else. The first
+/// argument of a render may be a mistyped command.
+fn take_operand(verb: Verb, raw: OsString, text: &str, have_one: bool, first: bool) -> Result<PathBuf, UsageError> {
+    match verb {
+        Verb::Render | Verb::Compare => Err(flags::unexpected_argument(text, first)),
+        Verb::Batch if !have_one => Ok(PathBuf::from(raw)),
+        _ => Err(UsageError(format!("{}unexpected argument '{text}'", verb.context()))),
+    }
+}
+
+fn answered(answer: Answer) -> Command {
+    match answer {
+        Answer::Help => Command::Help,
+        Answer::Version => Command::Version,
+    }
+}
+
+/// The command `verb` makes of what was given: required flags present, defaults filled in.
+fn assemble(verb: Verb, given: Given, operand: Option<PathBuf>, seen: &[&str]) -> Result<Command, UsageError> {
+    if let Some(missing) = flags::FLAGS.iter().find(|f| f.required.contains(verb) && !seen.contains(&f.name)) {
+        return Err(UsageError(format!("-{} {} is required", missing.name, missing.metavar)));
+    }
+    match verb {
+        Verb::Render | Verb::Compare => render_or_compare(verb, given),
+        Verb::Batch => Ok(Command::Batch {
+            file: operand.ok_or_else(|| UsageError("batch expects a file of command lines".into()))?,
+            backend: given.backend.unwrap_or_default(),
+            shard: given.shard,
+        }),
+        Verb::Stitch if given.files.outputs().is_empty() => {
+            Err(UsageError("stitch: nothing to stitch: give -output, -normals or -depth".into()))
+        }
+        Verb::Stitch => Ok(Command::Stitch(StitchArgs {
+            files: given.files,
+            input: given.input,
+            size: given.size,
+            keep_parts: given.keep_parts,
+        })),
+        Verb::Bench => Ok(Command::Bench(BenchArgs {
+            quick: given.quick,
+            runs: given.runs.unwrap_or(5),
+            out: given.out.unwrap_or_else(|| PathBuf::from("target/bench")),
+            corpus: given.corpus.unwrap_or_else(default_corpus),
+            only: given.only,
+        })),
+    }
+}
+
+/// A render must write something; `compare` compares the outputs listed with `--outputs`
+/// and those given a file name (the old form), and needs at least one.
+fn render_or_compare(verb: Verb, given: Given) -> Result<Command, UsageError> {
+    let (width, height) = given.size.expect("required");
+    if let Some(t) = given.tile.filter(|t| t.count > height) {
         return Err(UsageError(format!("--tile {}/{}: more bands than the image's {height} rows", t.index, t.count)));
     }
+    let named = given.files.outputs();
     let args = RenderArgs {
-        input,
+        input: given.input.expect("required"),
         width,
         height,
-        output,
-        normals,
-        depth,
-        shade_back,
-        backend,
-        triangle_test,
-        sphere_test,
-        tile,
+        files: given.files,
+        shade_back: given.shade_back,
+        backend: given.backend.unwrap_or_default(),
+        triangle_test: given.triangle_test,
+        sphere_test: given.sphere_test,
+        tile: given.tile,
     };
-    if compare {
-        return compare_command(args, listed_outputs.unwrap_or_default(), max_diff_pixels);
+    if verb == Verb::Render {
+        if named.is_empty() {
+            return Err(UsageError("nothing to write: give -output, -normals or -depth".into()));
+        }
+        return Ok(Command::Render(args));
     }
-    render_command(args)
-}
-
-/// A render command line, once its flags are read: it must write something, and no two
-/// outputs may name one file.
-fn render_command(args: RenderArgs) -> Result<Command, UsageError> {
-    if output_paths(&args).is_empty() {
-        return Err(UsageError("nothing to write: give -output, -normals or -depth".into()));
-    }
-    check_distinct_outputs(&args)?;
-    Ok(Command::Render(args))
-}
-
-/// `compare`, once its flags are read: it compares the outputs listed with `--outputs` and
-/// those given a file name (the old form), and needs at least one.
-fn compare_command(args: RenderArgs, listed: Outputs, max_diff_pixels: Option<u64>) -> Result<Command, UsageError> {
-    let outputs = Outputs {
-        color: listed.color || args.output.is_some(),
-        normals: listed.normals || args.normals.is_some(),
-        depth: listed.depth || args.depth.is_some(),
-    };
-    if outputs == Outputs::default() {
+    let outputs = given.outputs.union(named);
+    if outputs.is_empty() {
         return Err(UsageError("compare: nothing to compare: give --outputs color,normals,depth".into()));
     }
-    Ok(Command::Compare { args, outputs, max_diff_pixels })
+    Ok(Command::Compare { args, outputs, max_diff_pixels: given.max_diff_pixels })
 }
 
-fn not_for_compare(flag: &str) -> UsageError {
-    UsageError(format!(
-        "compare: {flag} does not apply: compare always renders with both the GPU and the f64 reference"
-    ))
-}
-
-/// The image files a render writes, with the flag naming each.
-fn output_paths(args: &RenderArgs) -> Vec<(&'static str, &Path)> {
-    let depth = args.depth.as_ref().map(|d| d.path.as_path());
-    [("-output", args.output.as_deref()), ("-normals", args.normals.as_deref()), ("-depth", depth)]
-        .into_iter()
-        .filter_map(|(flag, path)| Some((flag, path?)))
-        .collect()
-}
-
-/// Refuses two outputs naming one file: one image would silently replace the other.
-fn check_distinct_outputs(args: &RenderArgs) -> Result<(), UsageError> {
-    let paths = output_paths(args);
-    for (k, &(first_flag, first)) in paths.iter().enumerate() {
-        if let Some((flag, path)) = paths[k + 1..].iter().find(|(_, path)| same_file(first, path)) {
-            return Err(UsageError(format!(
-                "{first_flag} {} and {flag} {} name the same file: one image would replace the other",
-                first.display(),
-                path.display()
-            )));
-        }
+/// Where `raycaster bench` looks for the course's files without `--corpus`:
+/// `$RAYCASTER_CORPUS`, else `../shared/mit6837` beside the crate, as the tests do. The bench
+/// is a developer's tool run from a checkout, so the checkout's path, not the working
+/// directory, is what stays true.
+fn default_corpus() -> PathBuf {
+    match std::env::var_os("RAYCASTER_CORPUS") {
+        Some(dir) if !dir.is_empty() => PathBuf::from(dir),
+        _ => PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/mit6837"),
     }
-    Ok(())
-}
-
-/// Whether two output paths name one file: equal as written, or once their folders are
-/// resolved (`a.tga`, `./a.tga` and `out/../a.tga` are one file).
-fn same_file(a: &Path, b: &Path) -> bool {
-    a == b || resolved(a).is_some_and(|a| resolved(b) == Some(a))
-}
-
-fn resolved(path: &Path) -> Option<PathBuf> {
-    let folder = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p,
-        _ => Path::new("."),
-    };
-    Some(folder.canonicalize().ok()?.join(path.file_name()?))
-}
-
-/// An output path that is an existing folder, or ends with a separator as folder names do.
-fn names_a_folder(path: &Path) -> bool {
-    path.is_dir() || path.as_os_str().to_string_lossy().ends_with(std::path::is_separator)
-}
-
-/// `batch FILE [--backend B]`.
-fn parse_batch(args: &[OsString], habits: &mut Habits) -> Result<Command, UsageError> {
-    let mut values = Values::new(args, 0);
-    let (mut file, mut backend, mut shard) = (None, BackendChoice::Auto, None);
-    while let Some(raw) = values.next_flag() {
-        let text = raw.to_string_lossy().into_owned();
-        match flag_name(&text).as_deref() {
-            Some("backend") => backend = values.backend(&text)?,
-            Some("shard") => shard = Some(values.split(&text)?),
-            Some("h" | "help") => return Ok(Command::Help),
-            Some("V" | "version") => return Ok(Command::Version),
-            Some(shared) if Habits::takes(shared) => habits.accept(shared, &text, &mut values)?,
-            Some(_) => return Err(unknown_flag("batch: ", &text, &[&["backend", "shard"], SHARED_FLAGS].concat())),
-            None if file.is_none() => file = Some(PathBuf::from(raw)),
-            None => return Err(UsageError(format!("batch: unexpected argument '{text}'"))),
-        }
-        values.no_value_left(&text)?;
-    }
-    let file = file.ok_or_else(|| UsageError("batch expects a file of command lines".into()))?;
-    Ok(Command::Batch { file, backend, shard })
-}
-
-/// `stitch [-output O] [-normals N] [-depth MIN MAX D] [-input S] [-size W H] [--keep-parts]`.
-fn parse_stitch(args: &[OsString], habits: &mut Habits) -> Result<Command, UsageError> {
-    let mut values = Values::new(args, 0);
-    let mut stitch =
-        StitchArgs { output: None, normals: None, depth: None, input: None, size: None, keep_parts: false };
-    while let Some(raw) = values.next_flag() {
-        let text = raw.to_string_lossy().into_owned();
-        match flag_name(&text).as_deref() {
-            Some("output") => stitch.output = Some(values.image_path(&text)?),
-            Some("normals") => stitch.normals = Some(values.image_path(&text)?),
-            Some("depth") => stitch.depth = Some(values.depth(&text)?),
-            Some("input") => stitch.input = Some(values.path(&text)?),
-            Some("size") => stitch.size = Some(values.size(&text)?),
-            Some("keep_parts") => stitch.keep_parts = true,
-            Some("h" | "help") => return Ok(Command::Help),
-            Some("V" | "version") => return Ok(Command::Version),
-            Some(shared) if Habits::takes(shared) => habits.accept(shared, &text, &mut values)?,
-            Some(_) => {
-                let known = [&["output", "normals", "depth", "input", "size", "keep_parts"], SHARED_FLAGS].concat();
-                return Err(unknown_flag("stitch: ", &text, &known));
-            }
-            None => return Err(UsageError(format!("stitch: unexpected argument '{text}'"))),
-        }
-        values.no_value_left(&text)?;
-    }
-    if stitch.output.is_none() && stitch.normals.is_none() && stitch.depth.is_none() {
-        return Err(UsageError("stitch: nothing to stitch: give -output, -normals or -depth".into()));
-    }
-    Ok(Command::Stitch(stitch))
-}
-
-/// `bench [--quick] [--runs N] [--out DIR] [--corpus DIR]`.
-fn parse_bench(args: &[OsString], habits: &mut Habits) -> Result<Command, UsageError> {
-    let mut values = Values::new(args, 0);
-    let mut bench =
-        BenchArgs { quick: false, runs: 5, out: PathBuf::from("target/bench"), corpus: default_corpus(), only: None };
-    while let Some(raw) = values.next_flag() {
-        let text = raw.to_string_lossy().into_owned();
-        match flag_name(&text).as_deref() {
-            Some("quick") => bench.quick = true,
-            Some("out") => bench.out = values.path(&text)?,
-            Some("corpus") => bench.corpus = values.path(&text)?,
-            Some("only") => {
-                bench.only = Some(values.take(&text, "a part of a case name")?.to_string_lossy().into_owned())
-            }
-            Some("runs") => {
-                let value = values.take(&text, "a number of runs")?;
-                let text_value = value.to_string_lossy();
-                bench.runs = match text_value.parse::<usize>() {
-                    Ok(n) if n >= 1 => n,
-                    _ => return Err(UsageError(format!("{text}: '{text_value}' is not a whole number ≥ 1"))),
-                };
-            }
-            Some("h" | "help") => return Ok(Command::Help),
-            Some("V" | "version") => return Ok(Command::Version),
-            Some(shared) if Habits::takes(shared) => habits.accept(shared, &text, &mut values)?,
-            Some(_) => {
-                let known = [&["quick", "runs", "out", "corpus", "only"], SHARED_FLAGS].concat();
-                return Err(unknown_flag("bench: ", &text, &known));
-            }
-            None => return Err(UsageError(format!("bench: unexpected argument '{text}'"))),
-        }
-        values.no_value_left(&text)?;
-    }
-    Ok(Command::Bench(bench))
-}
-
-/// `-shade_back`, `--shade-back` → `shade_back`; `None` for something that is not a flag
-/// (a lone `-` or a word). A negative number is a value, never a flag, and values are read
-/// by the flag that takes them, so `-depth -1 5 d.tga` works.
-fn flag_name(arg: &str) -> Option<String> {
-    let name = arg.strip_prefix("--").or_else(|| arg.strip_prefix('-'))?;
-    if name.is_empty() {
-        return None;
-    }
-    Some(name.replace('-', "_"))
 }
 
 /// The argument list with a cursor, and readers for each kind of flag value.
@@ -527,13 +206,24 @@ impl<'a> Values<'a> {
         }
     }
 
-    /// Flags with several values take them as separate arguments only: `-size=200 200` would
-    /// read as if the first value belonged to the flag and the second did not.
-    fn no_inline_value(&self, flag: &str, usage: &str) -> Result<(), UsageError> {
-        match &self.inline {
-            Some(_) => Err(UsageError(format!("{flag}= is not supported: write {usage}"))),
-            None => Ok(()),
+    /// Reads the value `flag` (typed as `text`) takes and hands it to the flag's setter.
+    fn read(&mut self, flag: &Flag, text: &str, given: &mut Given) -> Result<(), UsageError> {
+        if flag.takes.several_values() && self.inline.is_some() {
+            return Err(UsageError(format!("{text}= is not supported: write {text} {}", flag.metavar)));
         }
+        match &flag.takes {
+            Takes::Switch(set) => set(given),
+            Takes::Path(set) => set(given, self.path(text)?),
+            Takes::Size(set) => set(given, self.size(text)?),
+            Takes::Depth(set) => set(given, self.depth(text)?),
+            Takes::Choice { names, set } => set(given, self.choice(text, &names())?),
+            Takes::Number { what, min, max, set } => set(given, self.number(text, what, *min, *max)?),
+            Takes::Split(set) => set(given, self.split(text)?),
+            Takes::Outputs(set) => set(given, self.outputs(text)?),
+            Takes::Text { what, set } => set(given, self.take(text, what)?.to_string_lossy().into_owned()),
+            Takes::Verbosity(_) | Takes::Answer(_) => unreachable!("handled by the parsing loop"),
+        }
+        Ok(())
     }
 
     fn take(&mut self, flag: &str, what: &str) -> Result<OsString, UsageError> {
@@ -551,27 +241,8 @@ impl<'a> Values<'a> {
         Ok(PathBuf::from(value))
     }
 
-    fn image_path(&mut self, flag: &str) -> Result<PathBuf, UsageError> {
-        let path = self.path(flag)?;
-        if names_a_folder(&path) {
-            return Err(UsageError(format!(
-                "{flag} {}: names a folder; give an image file name, such as {}",
-                path.display(),
-                path.join("image.tga").display()
-            )));
-        }
-        if ImageFormat::from_path(&path).is_none() {
-            return Err(UsageError(format!(
-                "{flag} {}: unsupported image format, use .tga, .png or .exr",
-                path.display()
-            )));
-        }
-        Ok(path)
-    }
-
     fn size(&mut self, flag: &str) -> Result<(u32, u32), UsageError> {
         let what = "two sizes: W H";
-        self.no_inline_value(flag, &format!("{flag} W H"))?;
         let w = self.take(flag, what)?;
         let h = self.take(flag, what)?;
         let side = |v: &OsString| -> Result<u32, UsageError> {
@@ -590,7 +261,6 @@ impl<'a> Values<'a> {
 
     fn depth(&mut self, flag: &str) -> Result<DepthArgs, UsageError> {
         let what = "three values: MIN MAX FILE";
-        self.no_inline_value(flag, &format!("{flag} MIN MAX FILE"))?;
         let number = |v: OsString| -> Result<f32, UsageError> {
             let text = v.to_string_lossy();
             match text.parse::<f32>() {
@@ -603,7 +273,7 @@ impl<'a> Values<'a> {
         if self.next >= self.args.len() {
             return Err(UsageError(format!("{flag} expects {what}")));
         }
-        let path = self.image_path(flag)?;
+        let path = self.path(flag)?;
         if min >= max {
             return Err(UsageError(format!("{flag}: MIN ({min}) must be less than MAX ({max})")));
         }
@@ -613,14 +283,15 @@ impl<'a> Values<'a> {
     /// `--outputs color,normals,depth`: a comma-separated list (`colour` is also accepted).
     fn outputs(&mut self, flag: &str) -> Result<Outputs, UsageError> {
         let value = self.take(flag, "a list such as color,normals,depth")?;
-        let mut outputs = Outputs::default();
+        let mut outputs = Outputs::NONE;
         for name in value.to_string_lossy().split(',') {
-            match name {
-                "color" | "colour" => outputs.color = true,
-                "normals" => outputs.normals = true,
-                "depth" => outputs.depth = true,
+            let output = match name {
+                "color" | "colour" => Output::Color,
+                "normals" => Output::Normals,
+                "depth" => Output::Depth,
                 _ => return Err(UsageError(format!("{flag}: '{name}' is not one of color, normals, depth"))),
-            }
+            };
+            outputs = outputs.with(output);
         }
         Ok(outputs)
     }
@@ -633,154 +304,39 @@ impl<'a> Values<'a> {
             .ok_or_else(|| UsageError(format!("{flag}: '{text}' is not K/N with whole numbers 0 ≤ K < N")))
     }
 
-    fn backend(&mut self, flag: &str) -> Result<BackendChoice, UsageError> {
-        self.choice(flag, &[("gpu", BackendChoice::Gpu), ("cpu", BackendChoice::Cpu), ("auto", BackendChoice::Auto)])
-    }
-
-    /// One of a fixed set of words.
-    fn choice<T: Copy>(&mut self, flag: &str, choices: &[(&str, T)]) -> Result<T, UsageError> {
-        let names: Vec<&str> = choices.iter().map(|(name, _)| *name).collect();
+    /// One of a fixed set of words, as its index.
+    fn choice(&mut self, flag: &str, names: &[&str]) -> Result<usize, UsageError> {
         let value = self.take(flag, &names.join(", "))?;
         let text = value.to_string_lossy();
-        choices
+        names
             .iter()
-            .find(|(name, _)| *name == text)
-            .map(|(_, v)| *v)
+            .position(|name| *name == text)
             .ok_or_else(|| UsageError(format!("{flag}: '{text}' is not one of {}", names.join(", "))))
     }
-}
 
-/// A parsed command line: what to do, and the flags every command shares.
-#[derive(Clone, Debug, PartialEq)]
-pub struct CommandLine {
-    pub command: Command,
-    pub habits: Habits,
-}
-
-/// How much the program says on stderr besides errors.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
-pub enum Verbosity {
-    /// `-q`: errors only (no warnings, notices or progress).
-    Quiet,
-    #[default]
-    Normal,
-    /// `-v`: also the adapter, the kernel variant and where the time and memory went.
-    Verbose,
-}
-
-/// The flags every command takes: `-q`/`--quiet`, `-v`/`--verbose`, `--threads N`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
-pub struct Habits {
-    pub verbosity: Verbosity,
-    /// Threads of the CPU reference's pool (rayon); `None`: one per core.
-    pub threads: Option<usize>,
-}
-
-/// The most `--threads` accepts: far above any core count, low enough to refuse a typo.
-pub const MAX_THREADS: usize = 1024;
-
-/// The shared flags' names, as [`flag_name`] spells them.
-const SHARED_FLAGS: &[&str] = &["q", "quiet", "v", "verbose", "threads", "version", "help"];
-
-/// The render command line's flags, for "did you mean".
-const RENDER_FLAGS: &[&str] = &[
-    "input",
-    "size",
-    "output",
-    "normals",
-    "depth",
-    "shade_back",
-    "backend",
-    "triangle_test",
-    "sphere_test",
-    "tile",
-    "quiet",
-    "verbose",
-    "threads",
-    "version",
-    "help",
-];
-
-impl Habits {
-    /// Whether `flag` (as [`flag_name`] spells it) is one of the shared flags.
-    fn takes(flag: &str) -> bool {
-        matches!(flag, "q" | "quiet" | "v" | "verbose" | "threads")
-    }
-
-    fn accept(&mut self, flag: &str, text: &str, values: &mut Values) -> Result<(), UsageError> {
-        let verbosity = match flag {
-            "q" | "quiet" => Verbosity::Quiet,
-            "v" | "verbose" => Verbosity::Verbose,
+    /// A whole number from `min` to `max`, `what` saying what it counts ("a number of runs").
+    fn number(&mut self, flag: &str, what: &str, min: u64, max: u64) -> Result<u64, UsageError> {
+        let value = self.take(flag, what)?;
+        let text = value.to_string_lossy();
+        match text.parse::<u64>() {
+            Ok(n) if (min..=max).contains(&n) => Ok(n),
             _ => {
-                let value = values.take(text, "a number of threads")?;
-                let value = value.to_string_lossy();
-                self.threads = match value.parse::<usize>() {
-                    Ok(n) if (1..=MAX_THREADS).contains(&n) => Some(n),
-                    _ => {
-                        return Err(UsageError(format!(
-                            "{text}: '{value}' is not a whole number from 1 to {MAX_THREADS}"
-                        )))
-                    }
+                let range = match (min, max) {
+                    (_, u64::MAX) if min > 0 => format!("a whole number ≥ {min}"),
+                    (_, u64::MAX) => format!("a whole {}", what.trim_start_matches("a ")),
+                    _ => format!("a whole number from {min} to {max}"),
                 };
-                return Ok(());
+                Err(UsageError(format!("{flag}: '{text}' is not {range}")))
             }
-        };
-        if self.verbosity != Verbosity::Normal && self.verbosity != verbosity {
-            return Err(UsageError(format!("{text}: -q and -v cannot be given together")));
         }
-        self.verbosity = verbosity;
-        Ok(())
-    }
-}
-
-/// "unknown flag", with the nearest known flag when one is close enough to be a typo, spelled
-/// with the dashes the user typed (`-outptu` → `-output`, `--shade-bakc` → `--shade-back`).
-fn unknown_flag(context: &str, text: &str, known: &[&str]) -> UsageError {
-    let name = flag_name(text).unwrap_or_default();
-    let nearest = known
-        .iter()
-        .filter(|k| k.len() > 1)
-        .map(|k| (strsim::jaro_winkler(&name, k), *k))
-        .max_by(|a, b| a.0.total_cmp(&b.0));
-    match nearest {
-        // Below about 0.85, Jaro–Winkler pairs unrelated words of similar length.
-        Some((score, k)) if score >= 0.85 => {
-            let spelled = if text.starts_with("--") { format!("--{}", k.replace('_', "-")) } else { format!("-{k}") };
-            UsageError(format!("{context}unknown flag '{text}'; did you mean '{spelled}'?"))
-        }
-        _ => UsageError(format!("{context}unknown flag '{text}'")),
-    }
-}
-
-/// The commands besides a plain render, for "did you mean".
-const COMMANDS: &[&str] = &["compare", "batch", "bench", "stitch"];
-
-/// A render's argument that is not a flag; the first argument of the line may be a
-/// mistyped command (`stich` → `stitch`).
-fn unexpected_argument(text: &str, first: bool) -> UsageError {
-    let nearest = COMMANDS.iter().map(|c| (strsim::jaro_winkler(text, c), *c)).max_by(|a, b| a.0.total_cmp(&b.0));
-    match nearest {
-        Some((score, command)) if first && score >= 0.85 => {
-            UsageError(format!("unexpected argument '{text}'; did you mean the command '{command}'?"))
-        }
-        _ => UsageError(format!("unexpected argument '{text}': flags start with '-'")),
-    }
-}
-
-/// Where `raycaster bench` looks for the course's files without `--corpus`:
-/// `$RAYCASTER_CORPUS`, else `../shared/mit6837` beside the crate, as the tests do. The bench
-/// is a developer's tool run from a checkout, so the checkout's path, not the working
-/// directory, is what stays true.
-fn default_corpus() -> PathBuf {
-    match std::env::var_os("RAYCASTER_CORPUS") {
-        Some(dir) if !dir.is_empty() => PathBuf::from(dir),
-        _ => PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/mit6837"),
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::app::args::BackendChoice;
+    use raycaster::render::{SphereTest, TriangleTest};
 
     fn parse(line: &str) -> Result<Command, UsageError> {
         parse_args(line.split_whitespace())
@@ -798,9 +354,9 @@ mod tests {
         let args = render("-input s.txt -size 200 100 -output o.tga -depth 9 11 d.tga -normals n.tga -shade_back");
         assert_eq!(args.input, PathBuf::from("s.txt"));
         assert_eq!((args.width, args.height), (200, 100));
-        assert_eq!(args.output, Some(PathBuf::from("o.tga")));
-        assert_eq!(args.normals, Some(PathBuf::from("n.tga")));
-        assert_eq!(args.depth, Some(DepthArgs { min: 9.0, max: 11.0, path: "d.tga".into() }));
+        assert_eq!(args.files.color, Some(PathBuf::from("o.tga")));
+        assert_eq!(args.files.normals, Some(PathBuf::from("n.tga")));
+        assert_eq!(args.files.depth, Some(DepthArgs { min: 9.0, max: 11.0, path: "d.tga".into() }));
         assert!(args.shade_back);
         assert_eq!(args.backend, BackendChoice::Auto);
     }
@@ -816,7 +372,7 @@ mod tests {
     #[test]
     fn negative_depth_range_is_values_not_flags() {
         let args = render("-input s -size 1 1 -depth -5 -1.5 d.tga");
-        assert_eq!(args.depth, Some(DepthArgs { min: -5.0, max: -1.5, path: "d.tga".into() }));
+        assert_eq!(args.files.depth, Some(DepthArgs { min: -5.0, max: -1.5, path: "d.tga".into() }));
     }
 
     #[test]
@@ -828,8 +384,8 @@ mod tests {
         match parse("compare -input s -size 1 1 -normals n.tga --max-diff-pixels 7") {
             Ok(Command::Compare { args, outputs, max_diff_pixels }) => {
                 assert_eq!(max_diff_pixels, Some(7));
-                assert_eq!(args.normals, Some(PathBuf::from("n.tga")));
-                assert_eq!(outputs, Outputs { normals: true, ..Outputs::default() });
+                assert_eq!(args.files.normals, Some(PathBuf::from("n.tga")));
+                assert_eq!(outputs, Outputs::from(Output::Normals));
             }
             other => panic!("{other:?}"),
         }
@@ -846,8 +402,8 @@ mod tests {
     fn compare_outputs() {
         match parse("compare -input s -size 2 2 --outputs depth,colour -normals n.tga") {
             Ok(Command::Compare { args, outputs, max_diff_pixels: None }) => {
-                assert_eq!(outputs, Outputs { color: true, normals: true, depth: true });
-                assert_eq!((args.output, args.depth), (None, None));
+                assert_eq!(outputs, Outputs::ALL);
+                assert_eq!((args.files.color, args.files.depth), (None, None));
             }
             other => panic!("{other:?}"),
         }
@@ -856,23 +412,12 @@ mod tests {
             ("compare -input s -size 2 2 --outputs color --outputs depth", "--outputs is given twice"),
             ("compare -input s -size 2 2 --outputs color,", "--outputs: '' is not one of"),
             ("compare -input s -size 2 2", "nothing to compare"),
+            ("compare -input s -size 4 4 -output o.tga --tile 0/2", "unknown flag '--tile'"),
             ("-input s -size 2 2 --outputs color", "unknown flag '--outputs'"),
         ];
         for (line, needle) in cases {
             assert!(parse(line).expect_err(line).0.contains(needle), "{line}: {:?}", parse(line));
         }
-    }
-
-    /// Two outputs naming one file are refused, however the name is spelled; compare writes
-    /// no file, so it does not mind.
-    #[test]
-    fn outputs_must_name_distinct_files() {
-        let err = parse("-input s -size 1 1 -normals a.tga -depth 0 1 ./a.tga").unwrap_err();
-        assert_eq!(err.0, "-normals a.tga and -depth ./a.tga name the same file: one image would replace the other");
-        // Unit tests run in the package root, which has a src folder.
-        assert!(parse("-input s -size 1 1 -output a.tga -normals src/../a.tga").unwrap_err().0.contains("same file"));
-        assert!(parse("-input s -size 1 1 -output a.tga -normals b.tga -depth 0 1 c.png").is_ok());
-        assert!(parse("compare -input s -size 1 1 -output a.tga -normals a.tga").is_ok());
     }
 
     #[test]
@@ -881,14 +426,50 @@ mod tests {
             parse("batch commands.txt --backend gpu"),
             Ok(Command::Batch { file: "commands.txt".into(), backend: BackendChoice::Gpu, shard: None })
         );
+        assert_eq!(
+            parse("batch f --shard 0/2"),
+            Ok(Command::Batch {
+                file: "f".into(),
+                backend: BackendChoice::Auto,
+                shard: Some(Split { index: 0, count: 2 })
+            })
+        );
         assert!(parse("batch").unwrap_err().0.contains("expects a file"));
         assert!(parse("batch a b").unwrap_err().0.contains("'b'"));
+    }
+
+    #[test]
+    fn stitch_and_tile() {
+        match parse("stitch -depth 1 2 d.exr -size 4 9 --keep-parts") {
+            Ok(Command::Stitch(s)) => {
+                assert_eq!((s.size, s.keep_parts, s.files.color), (Some((4, 9)), true, None));
+                assert_eq!(s.files.depth.map(|d| d.path), Some("d.exr".into()));
+            }
+            other => panic!("{other:?}"),
+        }
+        assert_eq!(render("-input s -size 4 9 -output o.exr --tile 1/3").tile, Some(Split { index: 1, count: 3 }));
+    }
+
+    #[test]
+    fn bench_defaults_and_values() {
+        match parse("bench --runs 2 --only scene2 --out o") {
+            Ok(Command::Bench(b)) => {
+                assert_eq!((b.quick, b.runs, b.out, b.only), (false, 2, "o".into(), Some("scene2".into())));
+            }
+            other => panic!("{other:?}"),
+        }
+        match parse("bench --quick") {
+            Ok(Command::Bench(b)) => assert_eq!((b.quick, b.runs, b.out), (true, 5, "target/bench".into())),
+            other => panic!("{other:?}"),
+        }
+        assert_eq!(parse("bench --runs 0").unwrap_err().0, "--runs: '0' is not a whole number ≥ 1");
     }
 
     #[test]
     fn help() {
         assert_eq!(parse("--help"), Ok(Command::Help));
         assert_eq!(parse("-input s -h"), Ok(Command::Help));
+        assert_eq!(parse("stitch --help"), Ok(Command::Help));
     }
 
     #[test]
@@ -932,11 +513,11 @@ mod tests {
             ("-input s -size 1 1 -output o.tga -shadeback", "did you mean '-shade_back'?"),
             ("-input s -size 1 1 -output o.tga --thread 2", "did you mean '--threads'?"),
             ("compare -input s -size 1 1 -output o.tga --max-diff-pixel 2", "did you mean '--max-diff-pixels'?"),
-            ("batch c.txt --backedn cpu", "did you mean '--backend'?"),
-            ("bench --quik", "did you mean '--quick'?"),
+            ("batch c.txt --backedn cpu", "batch: unknown flag '--backedn'; did you mean '--backend'?"),
+            ("bench --quik", "bench: unknown flag '--quik'; did you mean '--quick'?"),
             ("-input s -size 8 8 -output o.tga --tiel 0/2", "did you mean '--tile'?"),
             ("batch c.txt --shrad 0/2", "did you mean '--shard'?"),
-            ("stitch -output o.tga --keep-part", "did you mean '--keep-parts'?"),
+            ("stitch -output o.tga --keep-part", "stitch: unknown flag '--keep-part'; did you mean '--keep-parts'?"),
             ("stich -output o.tga", "did you mean the command 'stitch'?"),
         ];
         for (line, needle) in cases {
@@ -962,17 +543,18 @@ mod tests {
             ("-input s -size 1 1 -depth 5 5 d.tga", "MIN (5) must be less than MAX (5)"),
             ("-input s -size 1 1 -depth 5 nan d.tga", "'nan'"),
             ("-input s -size 1 1 -depth 1 2", "-depth expects three values"),
-            ("-input s -size 1 1 -output o.bmp", "unsupported image format"),
             ("-input s -size 1 1", "nothing to write"),
-            ("-size 1 1 -output o.tga", "-input"),
-            ("-input s -output o.tga", "-size"),
+            ("-size 1 1 -output o.tga", "-input SCENE is required"),
+            ("-input s -output o.tga", "-size W H is required"),
             ("-input s -size 1 1 -output o.tga --backend metal", "'metal'"),
             ("-input s -input t -size 1 1 -output o.tga", "-input is given twice"),
             ("-input s -size 1 1 -output o.tga stray", "'stray'"),
             ("-input", "-input expects a file name"),
-            ("-input s -size 1 1 -output o.tga --threads 0", "--threads: '0'"),
+            ("-input s -size 1 1 -output o.tga --threads 0", "--threads: '0' is not a whole number from 1 to 1024"),
             ("-input s -size 1 1 -output o.tga --threads lots", "--threads: 'lots'"),
             ("-input s -size 1 1 -output o.tga --threads", "--threads expects a number"),
+            ("compare -input s -size 1 1 -output o.tga --max-diff-pixels x", "'x' is not a whole number of pixels"),
+            ("stitch a", "stitch: unexpected argument 'a'"),
         ];
         for (line, needle) in cases {
             let err = parse(line).expect_err(line);

@@ -3,7 +3,7 @@
 //! function. Writing to a closed stdout or stderr (`raycaster --help | head -1`) is not an
 //! error: the text is dropped and the command goes on to its own verdict.
 
-use crate::app::cli::UsageError;
+use crate::app::args::UsageError;
 use crate::app::job;
 use raycaster::gpu::GpuError;
 use std::io::Write;

@@ -1,14 +1,16 @@
-//! One command line's work: read the scene, render, write the requested images.
+//! One command line's work: read the scene, render, write the requested images (whole, or
+//! one band's part files); `compare`'s renders; and batches of command lines.
 
+use crate::app::args::{Command, RenderArgs, Split};
 use crate::app::backend::Backend;
-use crate::app::cli::{Outputs, RenderArgs};
-use crate::app::output::{self, Output, Pixels, Sink};
+use crate::app::output_file::{OutputFile, Pixels, Sink};
+use crate::app::part::{self, Identity, PartHeader};
 use crate::app::progress::Progress;
-use crate::app::split::{self, Split};
+use crate::app::{cli, memory, validate};
 use raycaster::gpu::{GpuError, RenderStats};
 use raycaster::image_io::{self, ImageError, ImageFormat};
 use raycaster::metrics::OutputErrors;
-use raycaster::render::RenderOptions;
+use raycaster::render::{Outputs, RenderOptions};
 use raycaster::scene::{self, Scene, SceneError, SceneWarning};
 use std::fmt;
 use std::time::Instant;
@@ -32,9 +34,7 @@ pub fn options_for(args: &RenderArgs) -> RenderOptions {
     RenderOptions {
         width: args.width,
         height: args.height,
-        color: args.output.is_some(),
-        normals: args.normals.is_some(),
-        depth: args.depth.is_some(),
+        outputs: args.files.outputs(),
         shade_back: args.shade_back,
         triangle_test: args.triangle_test,
         sphere_test: args.sphere_test,
@@ -81,7 +81,7 @@ impl Report {
         }
         time += &format!(", writing {:.1} ms", self.write_ms);
         lines.push(time);
-        let mut memory = format!("memory: peak resident {:.0} MiB", crate::app::bench::peak_memory_mib());
+        let mut memory = format!("memory: peak resident {:.0} MiB", memory::peak_mib());
         if let Backend::Gpu(..) = backend {
             memory += &format!(", scene data on the GPU {:.1} KiB", stats.scene_bytes as f64 / 1024.0);
         }
@@ -130,11 +130,11 @@ pub fn render_scene(
     let start = Instant::now();
     let mut writing = std::time::Duration::ZERO;
     let options = options_for(args);
-    let outputs = output::outputs(&args.output, &args.normals, &args.depth);
+    let outputs = OutputFile::list(&args.files);
     let band = args.tile.map_or((0, args.height), |t| t.band(args.height));
     let mut sinks = match args.tile {
         None => outputs.iter().map(|o| Sink::image(o, args.width, args.height)).collect::<Result<Vec<_>, _>>()?,
-        Some(tile) => split::part_headers(scene, args, backend, tile, &outputs)
+        Some(tile) => part_headers(scene, args, backend, tile, &outputs)
             .map_err(Error::Split)?
             .into_iter()
             .zip(&outputs)
@@ -143,7 +143,7 @@ pub fn render_scene(
     };
     let bar = Progress::new(progress, u64::from(band.1), "rows");
     // One tile's rows into every sink, `pixels` giving each output's; counted as writing.
-    let mut write = |rows: u32, pixels: &mut dyn FnMut(&Output) -> Pixels| {
+    let mut write = |rows: u32, pixels: &mut dyn FnMut(&OutputFile) -> Pixels| {
         let written = Instant::now();
         for (sink, o) in sinks.iter_mut().zip(&outputs) {
             sink.write(&pixels(o))?;
@@ -160,9 +160,9 @@ pub fn render_scene(
     } else {
         // 8-bit images only: on the GPU the kernel quantises (a fraction of the bytes to
         // read back, and no float decoding).
-        let depth_range = args.depth.as_ref().map_or((0.0, 1.0), |d| (d.min, d.max));
+        let depth_range = args.files.depth_range().unwrap_or((0.0, 1.0));
         backend.render_images(scene, &options, depth_range, band, |_first_row, mut images| {
-            write(images.rows, &mut |o| Pixels::Rgb8(images.take(o.kind)))
+            write(images.rows, &mut |o| Pixels::Rgb8(images.take(o.output)))
         })?
     };
     drop(bar);
@@ -172,6 +172,50 @@ pub fn render_scene(
     image_io::persist_all(finished)?;
     let write_ms = (writing + finishing.elapsed()).as_secs_f64() * 1e3;
     Ok((stats, notice, render_ms, write_ms))
+}
+
+/// The flags that change pixels, as text. The CPU reference has its own intersection
+/// tests, so the kernel's variants count only on the GPU; the GPU and the reference differ
+/// in the last bits, so the backend counts.
+fn flags_text(args: &RenderArgs, backend: &Backend) -> String {
+    let shade_back = if args.shade_back { " -shade_back" } else { "" };
+    match backend {
+        Backend::Gpu(..) => format!(
+            "--backend gpu --triangle-test {} --sphere-test {}{shade_back}",
+            args.triangle_test.name(),
+            args.sphere_test.name()
+        ),
+        Backend::Cpu => format!("--backend cpu{shade_back}"),
+    }
+}
+
+/// The part headers of band `tile` for each output of a render.
+fn part_headers(
+    scene: &Scene,
+    args: &RenderArgs,
+    backend: &Backend,
+    tile: Split,
+    outputs: &[OutputFile],
+) -> Result<Vec<PartHeader>, String> {
+    let scene_hash = part::scene_hash(scene)?;
+    let flags = flags_text(args, backend);
+    let (first_row, rows) = tile.band(args.height);
+    Ok(outputs
+        .iter()
+        .map(|o| PartHeader {
+            identity: Identity {
+                width: args.width,
+                height: args.height,
+                count: tile.count,
+                output: o.describe(),
+                scene: scene_hash.clone(),
+                flags: flags.clone(),
+            },
+            index: tile.index,
+            first_row,
+            rows,
+        })
+        .collect())
 }
 
 /// What `raycaster compare` found: the GPU against the reference, per output.
@@ -221,14 +265,10 @@ fn output_failure(errors: &OutputErrors, max_diff_pixels: Option<u64>) -> Option
 /// Renders the `outputs` with the GPU and with the f64 reference, writing no file.
 pub fn compare(args: &RenderArgs, outputs: Outputs, gpu: &raycaster::gpu::GpuRenderer) -> Result<Comparison, Error> {
     let scene = scene::load_scene(&args.input)?;
-    let options =
-        RenderOptions { color: outputs.color, normals: outputs.normals, depth: outputs.depth, ..options_for(args) };
+    let options = RenderOptions { outputs, ..options_for(args) };
     let ours = gpu.render(&scene, &options)?;
     let reference = raycaster::cpu::render(&scene, &options);
-    let depth_range = match &args.depth {
-        Some(d) => (d.min, d.max),
-        None => raycaster::metrics::depth_range_of(&reference),
-    };
+    let depth_range = args.files.depth_range().unwrap_or_else(|| raycaster::metrics::depth_range_of(&reference));
     Ok(Comparison {
         errors: raycaster::metrics::compare_frames(&ours, &reference, depth_range),
         warnings: scene.warnings,
@@ -295,8 +335,8 @@ pub fn run_batch(
     for (line_number, line) in lines {
         let words: Vec<&str> = line.split_whitespace().collect();
         count.run += 1;
-        let failure = match crate::app::cli::parse_args(&words) {
-            Ok(crate::app::cli::Command::Render(args)) => match run(&args, backend, false) {
+        let failure = match cli::parse_args(&words).and_then(|c| validate::check(&c).map(|()| c)) {
+            Ok(Command::Render(args)) => match run(&args, backend, false) {
                 Ok(done) => {
                     let ms = done.parse_ms + done.render_ms + done.write_ms;
                     done.warnings.into_iter().for_each(|w| tell(line_number, LineReport::Warning(w)));
@@ -323,7 +363,8 @@ pub fn run_batch(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use raycaster::metrics::{ImageDiff, Output};
+    use raycaster::metrics::ImageDiff;
+    use raycaster::render::Output;
 
     fn errors(output: Output, pixels: usize, off: usize, non_finite: usize) -> OutputErrors {
         OutputErrors {

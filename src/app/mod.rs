@@ -1,15 +1,27 @@
-//! The `raycaster` command's own layer over the library: argument parsing ([`cli`]), the
-//! choice of renderer ([`backend`]), one command line's work and batches ([`job`]),
-//! `raycaster bench` ([`bench`]), the progress bar of long work ([`progress`]), how the
-//! command ends ([`exit`]) and interrupts ([`signals`]). Nothing here is part of the
-//! library's API.
+//! The `raycaster` command's own layer over the library. Nothing here is part of the
+//! library's API. Modules import only from the layers below their own:
+//!
+//! 1. [`exit`]: how the command ends; [`signals`]: interrupts, ending through [`exit`];
+//! 2. [`job`]: one command line's render, `compare`'s, and batches; [`stitch`]: assembling
+//!    the parts of a split render; [`bench`]: `raycaster bench`;
+//! 3. [`cli`]: parsing; [`validate`]: the checks of a parsed command line that look at the
+//!    file system; [`output_file`]: the image files asked for and the sinks they are
+//!    streamed into; [`backend`]: the renderer;
+//! 4. [`flags`]: the table of flags, from which parsing, help and suggestions come;
+//! 5. leaves: [`args`] (the parsed command line), [`part`] (the part-file format),
+//!    [`progress`] (the progress bar), [`memory`] (the peak-memory probe).
 
+pub mod args;
 pub mod backend;
 pub mod bench;
 pub mod cli;
 pub mod exit;
+pub mod flags;
 pub mod job;
-pub mod output;
+pub mod memory;
+pub mod output_file;
+pub mod part;
 pub mod progress;
 pub mod signals;
-pub mod split;
+pub mod stitch;
+pub mod validate;

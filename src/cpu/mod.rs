@@ -9,7 +9,7 @@ mod intersect;
 pub use intersect::{intersect_plane, intersect_sphere, intersect_triangle, Hit};
 
 use crate::camera::{PrimaryRays, Ray};
-use crate::render::{Frame, Pixel, RenderOptions};
+use crate::render::{Frame, Output, Pixel, RenderOptions};
 use crate::scene::{Bounds, Material, Mesh, Object, Scene, Shape};
 use glam::{DMat4, DVec3};
 use rayon::prelude::*;
@@ -91,7 +91,7 @@ impl<'a> Tracer<'a> {
     /// colour zero unless `options` asks for it.
     fn pixel(&self, ray: &Ray, t_min: f64, options: &RenderOptions) -> Pixel {
         let hit = self.closest_hit(ray, t_min);
-        let color = match (&hit, options.color) {
+        let color = match (&hit, options.outputs.contains(Output::Color)) {
             (_, false) => DVec3::ZERO,
             (None, true) => self.scene.background.color,
             (Some(hit), true) => self.shade(hit, ray, options.shade_back),

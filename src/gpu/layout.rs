@@ -2,7 +2,7 @@
 //! spelled out, with the same size and field offsets as naga reports for the WGSL side
 //! (checked by `tests/layout.rs`), and the per-pixel word layout of the kernel's output.
 
-use crate::render::{Frame, Pixel, RenderOptions};
+use crate::render::{Frame, Output, Outputs, Pixel, RenderOptions};
 use bytemuck::{Pod, Zeroable};
 /// WGSL `Params`.
 #[repr(C)]
@@ -102,24 +102,22 @@ pub struct GpuLight {
 /// bits of `t` (all ones where nothing was hit), which the host quantises in f64.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct PixelLayout {
-    pub color: bool,
-    pub normal: bool,
-    pub depth: bool,
+    pub outputs: Outputs,
     pub packed: bool,
 }
 
 impl PixelLayout {
     pub fn new(options: &RenderOptions, packed: bool) -> PixelLayout {
-        PixelLayout { color: options.color, normal: options.normals, depth: options.depth, packed }
+        PixelLayout { outputs: options.outputs, packed }
     }
 
     /// 32-bit words per pixel (the kernel's `PIXEL_WORDS`).
     pub fn words(&self) -> u32 {
-        let outputs = self.color as u32 + self.normal as u32 + self.depth as u32;
         if self.packed {
-            outputs.max(1)
+            (self.outputs.len() as u32).max(1)
         } else {
-            1 + 3 * self.color as u32 + 3 * self.normal as u32 + self.depth as u32
+            let wants = |output| self.outputs.contains(output) as u32;
+            1 + 3 * wants(Output::Color) + 3 * wants(Output::Normals) + wants(Output::Depth)
         }
     }
 
@@ -129,15 +127,15 @@ impl PixelLayout {
         let pixels = words.chunks_exact(self.words() as usize).map(|words| {
             let mut pixel = Pixel { hit: words[0] != 0, ..Pixel::default() };
             let mut w = 1;
-            if self.color {
+            if self.outputs.contains(Output::Color) {
                 pixel.color = f(&words[w..]);
                 w += 3;
             }
-            if self.normal {
+            if self.outputs.contains(Output::Normals) {
                 pixel.normal = f(&words[w..]);
                 w += 3;
             }
-            if self.depth {
+            if self.outputs.contains(Output::Depth) {
                 pixel.depth = f32::from_bits(words[w]);
             }
             pixel

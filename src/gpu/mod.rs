@@ -13,7 +13,7 @@ pub mod layout;
 pub mod precision;
 mod prepared;
 
-use crate::render::{Frame, RenderOptions, SphereTest, TriangleTest};
+use crate::render::{Frame, Output, RenderOptions, SphereTest, TriangleTest};
 use crate::scene::Scene;
 use flatten::SceneBuffers;
 use layout::PixelLayout;
@@ -164,9 +164,9 @@ impl KernelConfig {
             ("HAS_PLANES", b(self.has_planes)),
             ("HAS_TRIANGLES", b(self.has_triangles)),
             ("ORTHOGRAPHIC", b(self.orthographic)),
-            ("WANT_COLOR", b(self.pixel_layout.color)),
-            ("WANT_NORMAL", b(self.pixel_layout.normal)),
-            ("WANT_DEPTH", b(self.pixel_layout.depth)),
+            ("WANT_COLOR", b(self.pixel_layout.outputs.contains(Output::Color))),
+            ("WANT_NORMAL", b(self.pixel_layout.outputs.contains(Output::Normals))),
+            ("WANT_DEPTH", b(self.pixel_layout.outputs.contains(Output::Depth))),
             ("PIXEL_WORDS", self.pixel_layout.words() as f64),
             ("PACKED_8BIT", b(self.pixel_layout.packed)),
             ("NUM_LIGHTS", self.num_lights as f64),

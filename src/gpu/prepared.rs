@@ -8,7 +8,7 @@
 use super::flatten::SceneBuffers;
 use super::layout::{Params, PixelLayout};
 use super::{GpuError, GpuRenderer, KernelConfig, RenderStats, Timer, BINDINGS, OUTPUT_BINDING, WORKGROUP};
-use crate::render::{row_tiles, Frame, RenderOptions};
+use crate::render::{row_tiles, Frame, Output, RenderOptions};
 use crate::scene::Scene;
 use std::sync::mpsc::sync_channel;
 use wgpu::util::DeviceExt;
@@ -338,13 +338,14 @@ impl PackedTile<'_> {
 
     /// 8-bit RGB rows of the normal visualisation `|N|`, quantised by the kernel.
     pub fn normals_rgb(&self) -> Vec<u8> {
-        rgb_of(self.output_words(self.layout.color as usize))
+        rgb_of(self.output_words(self.layout.outputs.contains(Output::Color) as usize))
     }
 
     /// 8-bit RGB rows of the depth visualisation; the kernel hands over the distance `t`
     /// and the host quantises it in f64, exactly as [`crate::image_io::depth_image`] does.
     pub fn depth_rgb(&self, min: f32, max: f32) -> Vec<u8> {
-        let slot = self.layout.color as usize + self.layout.normal as usize;
+        let slot = self.layout.outputs.contains(Output::Color) as usize
+            + self.layout.outputs.contains(Output::Normals) as usize;
         let mut out = Vec::with_capacity(self.width as usize * self.rows as usize * 3);
         for word in self.output_words(slot) {
             let grey =

@@ -2,6 +2,7 @@
 //! failing loudly when absent), and pixel comparisons.
 #![allow(dead_code)]
 
+pub mod bin;
 pub mod hard;
 
 use raycaster::gpu::GpuRenderer;

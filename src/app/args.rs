@@ -1,0 +1,261 @@
+//! What a command line asks for, once parsed: the types [`crate::app::cli`] produces and
+//! the rest of the command reads. A leaf: it imports nothing of the app's, so every other
+//! module can depend on it.
+
+use raycaster::render::{Output, Outputs, SphereTest, TriangleTest};
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+/// The largest image side: TGA stores sizes in 16 bits.
+pub const MAX_SIDE: u32 = 65535;
+/// The largest image, in pixels (16384²).
+pub const MAX_PIXELS: u64 = 1 << 28;
+/// The most `--threads` accepts: far above any core count, low enough to refuse a typo.
+pub const MAX_THREADS: u64 = 1024;
+
+/// A parsed command line: what to do, and the flags every command shares.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CommandLine {
+    pub command: Command,
+    pub habits: Habits,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub enum Command {
+    Render(RenderArgs),
+    /// `raycaster compare`: GPU against the reference, nothing written. `args`' file names
+    /// only say which outputs to compare; `outputs` is the union of them and `--outputs`.
+    Compare {
+        args: RenderArgs,
+        outputs: Outputs,
+        max_diff_pixels: Option<u64>,
+    },
+    /// `raycaster batch FILE`: one render command line per line of FILE, in one process.
+    Batch {
+        file: PathBuf,
+        backend: BackendChoice,
+        /// `--shard K/N`: only the command lines whose index is K modulo N.
+        shard: Option<Split>,
+    },
+    /// `raycaster stitch`: assemble the part files of a split render.
+    Stitch(StitchArgs),
+    /// `raycaster bench`: speed and error per scene and size.
+    Bench(BenchArgs),
+    Help,
+    /// `--version`, `-V`.
+    Version,
+}
+
+/// Which renderer to use.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum BackendChoice {
+    Gpu,
+    Cpu,
+    #[default]
+    Auto,
+}
+
+impl BackendChoice {
+    pub const ALL: [BackendChoice; 3] = [BackendChoice::Gpu, BackendChoice::Cpu, BackendChoice::Auto];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            BackendChoice::Gpu => "gpu",
+            BackendChoice::Cpu => "cpu",
+            BackendChoice::Auto => "auto",
+        }
+    }
+}
+
+/// A render as the command line asks for it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RenderArgs {
+    pub input: PathBuf,
+    pub width: u32,
+    pub height: u32,
+    pub files: OutputPaths,
+    pub shade_back: bool,
+    pub backend: BackendChoice,
+    pub triangle_test: TriangleTest,
+    pub sphere_test: SphereTest,
+    /// `--tile K/N`: render band K of N and write part files (see [`crate::app::part`]).
+    pub tile: Option<Split>,
+}
+
+/// The files of `-output`, `-normals` and `-depth MIN MAX`.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct OutputPaths {
+    pub color: Option<PathBuf>,
+    pub normals: Option<PathBuf>,
+    pub depth: Option<DepthArgs>,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct DepthArgs {
+    pub min: f32,
+    pub max: f32,
+    pub path: PathBuf,
+}
+
+impl OutputPaths {
+    /// The outputs given a file, in [`Output::ALL`]'s order, with their files.
+    pub fn named(&self) -> Vec<(Output, &Path)> {
+        let depth = self.depth.as_ref().map(|d| d.path.as_path());
+        [(Output::Color, self.color.as_deref()), (Output::Normals, self.normals.as_deref()), (Output::Depth, depth)]
+            .into_iter()
+            .filter_map(|(output, path)| Some((output, path?)))
+            .collect()
+    }
+
+    /// The outputs given a file.
+    pub fn outputs(&self) -> Outputs {
+        self.named().into_iter().map(|(output, _)| output).collect()
+    }
+
+    /// The `-depth MIN MAX` range, when there is one.
+    pub fn depth_range(&self) -> Option<(f32, f32)> {
+        self.depth.as_ref().map(|d| (d.min, d.max))
+    }
+}
+
+/// The course's flag that names `output`'s file.
+pub fn flag_of(output: Output) -> &'static str {
+    match output {
+        Output::Color => "-output",
+        Output::Normals => "-normals",
+        Output::Depth => "-depth",
+    }
+}
+
+/// `raycaster stitch`: the render's output flags, and what to check the parts against.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StitchArgs {
+    pub files: OutputPaths,
+    /// Checked against the parts' scene hash when given.
+    pub input: Option<PathBuf>,
+    /// Checked against the parts' size when given.
+    pub size: Option<(u32, u32)>,
+    pub keep_parts: bool,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct BenchArgs {
+    /// A few small cases that take seconds (what CI runs).
+    pub quick: bool,
+    /// Renders per case (medians are reported).
+    pub runs: usize,
+    /// Where the CSV and the plot go.
+    pub out: PathBuf,
+    /// The course corpus (`a2/`, `meshes/`).
+    pub corpus: PathBuf,
+    /// Only the cases whose name contains this.
+    pub only: Option<String>,
+}
+
+/// How much the program says on stderr besides errors.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Verbosity {
+    /// `-q`: errors only (no warnings, notices or progress).
+    Quiet,
+    #[default]
+    Normal,
+    /// `-v`: also the adapter, the kernel variant and where the time and memory went.
+    Verbose,
+}
+
+/// The flags every command takes: `-q`/`--quiet`, `-v`/`--verbose`, `--threads N`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub struct Habits {
+    pub verbosity: Verbosity,
+    /// Threads of the CPU reference's pool (rayon); `None`: one per core.
+    pub threads: Option<usize>,
+}
+
+/// Member `index` (0-based) of `count`: a band of rows (`--tile`) or a batch shard (`--shard`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Split {
+    pub index: u32,
+    pub count: u32,
+}
+
+impl Split {
+    /// `K/N` with `0 ≤ K < N`.
+    pub fn parse(text: &str) -> Option<Split> {
+        let (k, n) = text.split_once('/')?;
+        let (index, count) = (k.parse::<u32>().ok()?, n.parse::<u32>().ok()?);
+        (index < count).then_some(Split { index, count })
+    }
+
+    /// Band K of `height` rows as `(first_row, rows)`, rows counted from the top: rows
+    /// `⌊K·H/N⌋ .. ⌊(K+1)·H/N⌋`, so band heights differ by at most one and the bands tile
+    /// the image exactly.
+    pub fn band(self, height: u32) -> (u32, u32) {
+        let edge = |k: u32| (k as u64 * height as u64 / self.count as u64) as u32;
+        let (first, end) = (edge(self.index), edge(self.index + 1));
+        (first, end - first)
+    }
+
+    /// Whether this shard runs the batch's command number `command` (0-based).
+    pub fn takes(self, command: usize) -> bool {
+        command % self.count as usize == self.index as usize
+    }
+}
+
+/// A bad command line, as one line of text.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct UsageError(pub String);
+
+impl fmt::Display for UsageError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{} (try --help)", self.0)
+    }
+}
+
+impl std::error::Error for UsageError {}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bands_tile_the_image_and_differ_by_at_most_one_row() {
+        let bands: Vec<_> = (0..3).map(|k| Split { index: k, count: 3 }.band(23)).collect();
+        assert_eq!(bands, [(0, 7), (7, 8), (15, 8)]);
+        for (height, count) in [(1, 1), (7, 7), (100, 7), (65535, 64), (5, 3)] {
+            let mut next = 0;
+            for index in 0..count {
+                let (first, rows) = Split { index, count }.band(height);
+                assert_eq!(first, next);
+                assert!(rows == height / count || rows == height / count + 1, "{height}/{count}: {rows}");
+                next = first + rows;
+            }
+            assert_eq!(next, height);
+        }
+    }
+
+    #[test]
+    fn shards_take_every_nth_command() {
+        let shard = Split { index: 1, count: 3 };
+        assert_eq!((0..8).filter(|&c| shard.takes(c)).collect::<Vec<_>>(), [1, 4, 7]);
+    }
+
+    #[test]
+    fn splits_parse_only_k_below_n() {
+        assert_eq!(Split::parse("2/5"), Some(Split { index: 2, count: 5 }));
+        for bad in ["5/5", "0/0", "-1/3", "1", "a/b", "1/2/3", ""] {
+            assert_eq!(Split::parse(bad), None, "{bad}");
+        }
+    }
+
+    #[test]
+    fn named_outputs_come_in_the_course_order() {
+        let files = OutputPaths {
+            color: None,
+            normals: Some("n.tga".into()),
+            depth: Some(DepthArgs { min: 1.0, max: 2.0, path: "d.exr".into() }),
+        };
+        assert_eq!(files.named(), [(Output::Normals, Path::new("n.tga")), (Output::Depth, Path::new("d.exr"))]);
+        assert_eq!(files.outputs(), Outputs::from(Output::Normals).with(Output::Depth));
+        assert_eq!(files.depth_range(), Some((1.0, 2.0)));
+    }
+}

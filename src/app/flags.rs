@@ -1,0 +1,567 @@
+//! The one table of flags (docs/SPEC.md §1): each flag's spellings, its value, the commands
+//! that take it, its help and where its value goes. Parsing ([`crate::app::cli`]), the
+//! usage text ([`usage`]) and the "did you mean" suggestions ([`unknown_flag`]) all read
+//! this table, so a flag is added, renamed or documented in one place.
+
+use crate::app::args::{BackendChoice, DepthArgs, OutputPaths, Split, UsageError, Verbosity, MAX_THREADS};
+use raycaster::render::{Outputs, SphereTest, TriangleTest};
+use std::path::PathBuf;
+
+/// What a command line is: a render, or one of the commands named by its first word.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Verb {
+    Render = 0,
+    Compare = 1,
+    Batch = 2,
+    Stitch = 3,
+    Bench = 4,
+}
+
+impl Verb {
+    /// The verbs named by a first word, as typed.
+    const NAMED: [Verb; 4] = [Verb::Compare, Verb::Batch, Verb::Stitch, Verb::Bench];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Verb::Render => "",
+            Verb::Compare => "compare",
+            Verb::Batch => "batch",
+            Verb::Stitch => "stitch",
+            Verb::Bench => "bench",
+        }
+    }
+
+    /// The verb a command line's first argument names; a render has none.
+    pub fn of_first(arg: Option<&str>) -> Verb {
+        Verb::NAMED.into_iter().find(|v| Some(v.name()) == arg).unwrap_or(Verb::Render)
+    }
+
+    /// What errors about a command's own flags start with: `stitch: `; nothing for a
+    /// render or `compare`, whose flags are the render's.
+    pub fn context(self) -> String {
+        match self {
+            Verb::Render | Verb::Compare => String::new(),
+            other => format!("{}: ", other.name()),
+        }
+    }
+}
+
+/// A set of [`Verb`]s: the commands that take a flag.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Verbs(u8);
+
+impl Verbs {
+    const fn of(verbs: &[Verb]) -> Verbs {
+        let mut bits = 0;
+        let mut k = 0;
+        while k < verbs.len() {
+            bits |= 1 << verbs[k] as u8;
+            k += 1;
+        }
+        Verbs(bits)
+    }
+
+    const EVERY: Verbs = Verbs(0b11111);
+    const NONE: Verbs = Verbs(0);
+
+    pub fn contains(self, verb: Verb) -> bool {
+        self.0 & 1 << verb as u8 != 0
+    }
+}
+
+/// What everything a command line gives is collected into, before [`crate::app::cli`] makes
+/// it a [`crate::app::args::Command`]; what was not given stays `None`.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Given {
+    pub input: Option<PathBuf>,
+    pub size: Option<(u32, u32)>,
+    pub files: OutputPaths,
+    pub shade_back: bool,
+    pub backend: Option<BackendChoice>,
+    pub triangle_test: TriangleTest,
+    pub sphere_test: SphereTest,
+    pub tile: Option<Split>,
+    pub outputs: Outputs,
+    pub max_diff_pixels: Option<u64>,
+    pub shard: Option<Split>,
+    pub keep_parts: bool,
+    pub quick: bool,
+    pub runs: Option<usize>,
+    pub out: Option<PathBuf>,
+    pub corpus: Option<PathBuf>,
+    pub only: Option<String>,
+    pub threads: Option<usize>,
+}
+
+/// A flag that answers the command line by itself, whatever else it holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Answer {
+    Help,
+    Version,
+}
+
+/// What a flag takes after it, and where the value goes.
+pub enum Takes {
+    Switch(fn(&mut Given)),
+    /// `-q` or `-v`: the two exclude each other.
+    Verbosity(Verbosity),
+    Answer(Answer),
+    /// A file name (not empty).
+    Path(fn(&mut Given, PathBuf)),
+    /// `W H`, each 1…[`crate::app::args::MAX_SIDE`], at most [`crate::app::args::MAX_PIXELS`].
+    Size(fn(&mut Given, (u32, u32))),
+    /// `MIN MAX FILE`, finite, `MIN < MAX`.
+    Depth(fn(&mut Given, DepthArgs)),
+    /// One of `names()`; the setter gets its index.
+    Choice {
+        names: fn() -> Vec<&'static str>,
+        set: fn(&mut Given, usize),
+    },
+    /// A whole number from `min` to `max`; `what` names it where it is missing.
+    Number {
+        what: &'static str,
+        min: u64,
+        max: u64,
+        set: fn(&mut Given, u64),
+    },
+    /// `K/N`.
+    Split(fn(&mut Given, Split)),
+    /// `color,normals,depth`, any of them.
+    Outputs(fn(&mut Given, Outputs)),
+    /// Any text; `what` names it where it is missing.
+    Text {
+        what: &'static str,
+        set: fn(&mut Given, String),
+    },
+}
+
+impl Takes {
+    /// Whether it takes more than one value. Those cannot be glued on with `=`:
+    /// `-size=200 200` would read as if the second value belonged to no flag.
+    pub fn several_values(&self) -> bool {
+        matches!(self, Takes::Size(_) | Takes::Depth(_))
+    }
+}
+
+pub struct Flag {
+    /// The name as [`flag_name`] spells it (`shade_back`, `triangle_test`).
+    pub name: &'static str,
+    /// A one-letter spelling (`q` for `-q`).
+    pub short: Option<&'static str>,
+    /// The course's flags are shown with one dash (`-input`), ours with two (`--backend`).
+    pub course: bool,
+    /// The value as help shows it (`FILE`, `W H`).
+    pub metavar: &'static str,
+    pub takes: Takes,
+    pub verbs: Verbs,
+    /// The verbs the flag is required by.
+    pub required: Verbs,
+    /// Whether giving it twice is an error rather than the last one winning: a second file
+    /// or size is far more likely a mistake than a change of mind.
+    pub once: bool,
+    /// A verb that refuses the flag for a reason other than not knowing it.
+    pub refused: Option<(Verb, &'static str)>,
+    pub help: &'static str,
+}
+
+use Verb::{Batch, Bench, Compare, Render, Stitch};
+
+const IMAGE_VERBS: Verbs = Verbs::of(&[Render, Compare, Stitch]);
+const RENDER_VERBS: Verbs = Verbs::of(&[Render, Compare]);
+
+/// Every flag, in the order help lists them.
+pub static FLAGS: &[Flag] = &[
+    Flag::course("input", "SCENE", Takes::Path(|g, path| g.input = Some(path)), IMAGE_VERBS)
+        .required(RENDER_VERBS)
+        .once()
+        .help("scene file (obj_file paths resolve from its folder)"),
+    Flag::course("size", "W H", Takes::Size(|g, size| g.size = Some(size)), IMAGE_VERBS)
+        .required(RENDER_VERBS)
+        .once()
+        .help("image size in pixels"),
+    Flag::course("output", "FILE", Takes::Path(|g, path| g.files.color = Some(path)), IMAGE_VERBS)
+        .once()
+        .help("diffuse-shaded image (.tga or .png; .exr: linear, unclamped)"),
+    Flag::course("normals", "FILE", Takes::Path(|g, path| g.files.normals = Some(path)), IMAGE_VERBS)
+        .once()
+        .help("normal visualisation |N| (.tga or .png; .exr: the signed normal)"),
+    Flag::course("depth", "MIN MAX FILE", Takes::Depth(|g, depth| g.files.depth = Some(depth)), IMAGE_VERBS)
+        .once()
+        .help(
+            "depth visualisation, white at MIN, black at MAX (.tga or .png;\n\
+             .exr: the distance t itself, +inf where nothing is hit; MIN and\n\
+             MAX are then not used)",
+        ),
+    Flag::course("shade_back", "", Takes::Switch(|g| g.shade_back = true), RENDER_VERBS)
+        .help("shade back-facing hits as if they faced the viewer"),
+    Flag::ours(
+        "backend",
+        "B",
+        Takes::Choice {
+            names: || BackendChoice::ALL.map(BackendChoice::name).to_vec(),
+            set: |g, k| g.backend = Some(BackendChoice::ALL[k]),
+        },
+        Verbs::of(&[Render, Batch]),
+    )
+    .refused(Compare, "compare always renders with both the GPU and the f64 reference")
+    .help(
+        "gpu, cpu (the f64 reference) or auto (default: the GPU if one is\n\
+         found, else the CPU with a notice)",
+    ),
+    Flag::ours(
+        "triangle_test",
+        "T",
+        Takes::Choice {
+            names: || TriangleTest::ALL.map(TriangleTest::name).to_vec(),
+            set: |g, k| g.triangle_test = TriangleTest::ALL[k],
+        },
+        RENDER_VERBS,
+    )
+    .help("the GPU's ray/triangle test (default watertight)"),
+    Flag::ours(
+        "sphere_test",
+        "S",
+        Takes::Choice {
+            names: || SphereTest::ALL.map(SphereTest::name).to_vec(),
+            set: |g, k| g.sphere_test = SphereTest::ALL[k],
+        },
+        RENDER_VERBS,
+    )
+    .help("the GPU's ray/sphere test (default robust)"),
+    Flag::ours("tile", "K/N", Takes::Split(|g, tile| g.tile = Some(tile)), Verbs::of(&[Render])).help(
+        "render only band K (0-based, from the top) of N bands of rows\n\
+         and write FILE.part-K-of-N beside each output; see stitch",
+    ),
+    Flag::ours("quiet", "", Takes::Verbosity(Verbosity::Quiet), Verbs::EVERY)
+        .short("q")
+        .help("errors only: no warnings, notices or progress bar"),
+    Flag::ours("verbose", "", Takes::Verbosity(Verbosity::Verbose), Verbs::EVERY).short("v").help(
+        "also the adapter, the kernel variant, where the time went and\n\
+         the peak memory",
+    ),
+    Flag::ours(
+        "threads",
+        "N",
+        Takes::Number {
+            what: "a number of threads",
+            min: 1,
+            max: MAX_THREADS,
+            set: |g, n| g.threads = Some(n as usize),
+        },
+        Verbs::EVERY,
+    )
+    .help("threads of the CPU reference (default: one per core)"),
+    Flag::ours("help", "", Takes::Answer(Answer::Help), Verbs::EVERY).short("h").help("this text"),
+    Flag::ours("version", "", Takes::Answer(Answer::Version), Verbs::EVERY).short("V").help("the version"),
+    Flag::ours("keep_parts", "", Takes::Switch(|g| g.keep_parts = true), Verbs::of(&[Stitch]))
+        .help("keep the part files"),
+    Flag::ours("shard", "K/N", Takes::Split(|g, shard| g.shard = Some(shard)), Verbs::of(&[Batch])).help(
+        "run only the command lines whose index (0-based, counting\n\
+         command lines only, not blank or comment lines) is K modulo N",
+    ),
+    Flag::ours("quick", "", Takes::Switch(|g| g.quick = true), Verbs::of(&[Bench]))
+        .help("a few small cases, seconds in all"),
+    Flag::ours(
+        "runs",
+        "N",
+        Takes::Number { what: "a number of runs", min: 1, max: u64::MAX, set: |g, n| g.runs = Some(n as usize) },
+        Verbs::of(&[Bench]),
+    )
+    .help("renders per case, of which the medians are reported (default 5)"),
+    Flag::ours("out", "DIR", Takes::Path(|g, dir| g.out = Some(dir)), Verbs::of(&[Bench]))
+        .help("where bench.csv and bench.png go (default target/bench)"),
+    Flag::ours("corpus", "DIR", Takes::Path(|g, dir| g.corpus = Some(dir)), Verbs::of(&[Bench])).help(
+        "the course's files (default $RAYCASTER_CORPUS, else\n\
+         ../shared/mit6837 beside the source checkout)",
+    ),
+    Flag::ours(
+        "only",
+        "NAME",
+        Takes::Text { what: "a part of a case name", set: |g, name| g.only = Some(name) },
+        Verbs::of(&[Bench]),
+    )
+    .help("only the cases whose name contains NAME"),
+    Flag::ours("outputs", "LIST", Takes::Outputs(|g, outputs| g.outputs = outputs), Verbs::of(&[Compare]))
+        .once()
+        .help("the outputs to compare: color, normals, depth, comma-separated"),
+    Flag::ours(
+        "max_diff_pixels",
+        "N",
+        Takes::Number { what: "a number of pixels", min: 0, max: u64::MAX, set: |g, n| g.max_diff_pixels = Some(n) },
+        Verbs::of(&[Compare]),
+    )
+    .help("pixels an output may have more than 1 level off (default 0.1 %)"),
+];
+
+/// The table's rows say only what differs from these defaults: optional, given any number
+/// of times (the last one wins), no short spelling.
+impl Flag {
+    /// A flag of the course's, shown with one dash (`-input`).
+    const fn course(name: &'static str, metavar: &'static str, takes: Takes, verbs: Verbs) -> Flag {
+        Flag {
+            name,
+            short: None,
+            course: true,
+            metavar,
+            takes,
+            verbs,
+            required: Verbs::NONE,
+            once: false,
+            refused: None,
+            help: "",
+        }
+    }
+
+    /// One of ours, shown with two dashes (`--backend`).
+    const fn ours(name: &'static str, metavar: &'static str, takes: Takes, verbs: Verbs) -> Flag {
+        Flag { course: false, ..Flag::course(name, metavar, takes, verbs) }
+    }
+
+    const fn short(self, short: &'static str) -> Flag {
+        Flag { short: Some(short), ..self }
+    }
+
+    const fn required(self, by: Verbs) -> Flag {
+        Flag { required: by, ..self }
+    }
+
+    const fn once(self) -> Flag {
+        Flag { once: true, ..self }
+    }
+
+    const fn refused(self, by: Verb, why: &'static str) -> Flag {
+        Flag { refused: Some((by, why)), ..self }
+    }
+
+    const fn help(self, help: &'static str) -> Flag {
+        Flag { help, ..self }
+    }
+}
+
+impl Flag {
+    /// The flag named `name` (as [`flag_name`] spells it), in any spelling.
+    pub fn find(name: &str) -> Option<&'static Flag> {
+        FLAGS.iter().find(|f| f.name == name || f.short == Some(name))
+    }
+
+    /// How help spells the flag: `-input`, `--triangle-test`, `-q, --quiet`.
+    fn spelled(&self) -> String {
+        let long = if self.course { format!("-{}", self.name) } else { format!("--{}", self.name.replace('_', "-")) };
+        match self.short {
+            Some(short) => format!("-{short}, {long}"),
+            None => long,
+        }
+    }
+
+    /// The flag and its value as a synopsis shows it: the choices themselves where there
+    /// are a few (`--backend gpu|cpu|auto`), in brackets unless `verb` requires it.
+    fn synopsis(&self, verb: Verb) -> String {
+        let long = if self.course { format!("-{}", self.name) } else { format!("--{}", self.name.replace('_', "-")) };
+        let value = match &self.takes {
+            Takes::Choice { names, .. } => names().join("|"),
+            _ => self.metavar.to_string(),
+        };
+        let text = if value.is_empty() { long } else { format!("{long} {value}") };
+        if self.required.contains(verb) {
+            text
+        } else {
+            format!("[{text}]")
+        }
+    }
+
+    /// The flag's lines in help: its spelling and value, then its help, aligned.
+    fn help_lines(&self) -> String {
+        let head =
+            if self.metavar.is_empty() { self.spelled() } else { format!("{} {}", self.spelled(), self.metavar) };
+        let help = self.help.replace('\n', &format!("\n{:25}", ""));
+        format!("  {head:<23}{help}\n")
+    }
+}
+
+/// `-shade_back`, `--shade-back` → `shade_back`; `None` for something that is not a flag
+/// (a lone `-` or a word). A negative number is a value, never a flag, and values are read
+/// by the flag that takes them, so `-depth -1 5 d.tga` works.
+pub fn flag_name(arg: &str) -> Option<String> {
+    let name = arg.strip_prefix("--").or_else(|| arg.strip_prefix('-'))?;
+    if name.is_empty() {
+        return None;
+    }
+    Some(name.replace('-', "_"))
+}
+
+/// Below about 0.85, Jaro–Winkler pairs unrelated words of similar length.
+const TYPO_SIMILARITY: f64 = 0.85;
+
+/// The candidate most like `word`, when it is close enough to be a typo of it.
+fn nearest<'a>(word: &str, candidates: impl Iterator<Item = &'a str>) -> Option<&'a str> {
+    candidates
+        .map(|c| (strsim::jaro_winkler(word, c), c))
+        .max_by(|a, b| a.0.total_cmp(&b.0))
+        .filter(|(score, _)| *score >= TYPO_SIMILARITY)
+        .map(|(_, c)| c)
+}
+
+/// "unknown flag", with the nearest flag `verb` takes when one is close enough to be a
+/// typo, spelled with the dashes the user typed (`-outptu` → `-output`, `--shade-bakc` →
+/// `--shade-back`).
+pub fn unknown_flag(verb: Verb, text: &str) -> UsageError {
+    let name = flag_name(text).unwrap_or_default();
+    let known = FLAGS.iter().filter(|f| f.verbs.contains(verb)).map(|f| f.name);
+    let context = verb.context();
+    match nearest(&name, known) {
+        Some(k) => {
+            let spelled = if text.starts_with("--") { format!("--{}", k.replace('_', "-")) } else { format!("-{k}") };
+            UsageError(format!("{context}unknown flag '{text}'; did you mean '{spelled}'?"))
+        }
+        None => UsageError(format!("{context}unknown flag '{text}'")),
+    }
+}
+
+/// A render's argument that is not a flag; the first argument of the line may be a
+/// mistyped command (`stich` → `stitch`).
+pub fn unexpected_argument(text: &str, first: bool) -> UsageError {
+    match nearest(text, Verb::NAMED.iter().map(|v| v.name())).filter(|_| first) {
+        Some(verb) => UsageError(format!("unexpected argument '{text}'; did you mean the command '{verb}'?")),
+        None => UsageError(format!("unexpected argument '{text}': flags start with '-'")),
+    }
+}
+
+/// What each command is for, in help, after its synopsis: the verb, what it takes besides
+/// flags, and a paragraph.
+const COMMANDS: [(Verb, &str, &str); 4] = [
+    (
+        Stitch,
+        "",
+        "Assembles the part files of a --tile render into the images a single render writes,
+  byte for byte. Refuses, naming them, when parts are missing or come from different
+  renders (or from another scene or size than -input/-size say). Deletes the parts once
+  the images are written.",
+    ),
+    (
+        Batch,
+        "FILE",
+        "Runs every line of FILE as a render command line (the course's commands.txt works as it
+  is: arguments without the program name, paths relative to the working directory, split at
+  spaces), in one process with one GPU device. Blank lines and lines starting with # are
+  skipped. A failing line is reported with its number and the rest still run; the exit
+  status is then 1. -q, -v and --threads belong on batch's own command line (on a line of
+  FILE they are ignored).",
+    ),
+    (
+        Bench,
+        "",
+        "Times the GPU kernel on the course scenes, larger meshes and image sizes, with the error
+  against the f64 reference for each row; prints a Markdown table and writes DIR/bench.csv
+  and DIR/bench.png.",
+    ),
+    (
+        Compare,
+        "",
+        "Renders the outputs listed (or named by -output, -normals, -depth, whose files are not
+  written) with the GPU and with the f64 reference, and prints their differences per
+  output: pixels more than 1 level apart, hit/miss disagreements, depth and normal errors,
+  NaN/inf counts. Exits 1 when an output has more than 0.1 % of its pixels (or N pixels)
+  more than 1 level off, or the GPU produced NaN or infinity. Takes the kernel flags and
+  -shade_back; not --backend (it always runs both).",
+    ),
+];
+
+const USAGE_HEAD: &str = "raycaster: render an MIT 6.837 scene file on the GPU (wgpu) or with the f64 CPU reference";
+
+const USAGE_TAIL: &str = "\
+Flags take one or two dashes; `-shade_back` and `--shade-back` are the same. A flag with
+one value also takes it after '=' (--backend=cpu); -size and -depth take theirs after spaces.
+-q, -v and --threads apply to every command. At least one of -output, -normals, -depth is
+required. On a terminal, work that lasts more than a second shows a progress bar on stderr.";
+
+/// Synopses are wrapped to this width.
+const WIDTH: usize = 90;
+
+/// The usage text `--help` prints: the render's synopsis and every flag it takes, then
+/// each command's synopsis, paragraph and the flags only it takes.
+pub fn usage() -> String {
+    let mut text = format!("{USAGE_HEAD}\n\n");
+    text += &synopsis("Usage: raycaster", Render, "");
+    text += "\n";
+    FLAGS.iter().filter(|f| f.verbs.contains(Render)).for_each(|f| text += &f.help_lines());
+    for (verb, operand, paragraph) in COMMANDS {
+        text += "\n";
+        text += &synopsis(&format!("raycaster {}", verb.name()), verb, operand);
+        text += &format!("  {paragraph}\n");
+        FLAGS.iter().filter(|f| f.verbs.contains(verb) && !f.verbs.contains(Render)).for_each(|f| {
+            text += &f.help_lines();
+        });
+    }
+    text + "\n" + USAGE_TAIL
+}
+
+/// `start`, then `operand` and every flag `verb` takes, wrapped under the first. The flags
+/// every command takes are listed once, in the render's; `-q | -v` exclude each other.
+fn synopsis(start: &str, verb: Verb, operand: &str) -> String {
+    let flags = FLAGS.iter().filter(|f| f.verbs.contains(verb) && !matches!(f.takes, Takes::Answer(_)));
+    let flags = flags.filter(|f| verb == Render || f.verbs != Verbs::EVERY);
+    let mut words: Vec<String> = Vec::new();
+    words.extend((!operand.is_empty()).then(|| operand.to_string()));
+    for flag in flags {
+        match (&flag.takes, words.last_mut()) {
+            (Takes::Verbosity(_), Some(last)) if last.starts_with("[-q") => {
+                *last = format!("{} | -{}]", last.trim_end_matches(']'), flag.short.unwrap_or(flag.name));
+            }
+            (Takes::Verbosity(_), _) => words.push(format!("[-{}]", flag.short.unwrap_or(flag.name))),
+            _ => words.push(flag.synopsis(verb)),
+        }
+    }
+    let indent = " ".repeat(start.len() + 1);
+    let mut lines = vec![start.to_string()];
+    for word in words {
+        let line = lines.last_mut().expect("starts with one line");
+        if line.len() + 1 + word.len() > WIDTH && line.len() > indent.len() {
+            lines.push(format!("{indent}{word}"));
+        } else {
+            line.push(' ');
+            line.push_str(&word);
+        }
+    }
+    lines.join("\n") + "\n"
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every flag has one name, and its spellings cannot be taken for another's.
+    #[test]
+    fn names_are_unique() {
+        let mut names: Vec<&str> = FLAGS.iter().flat_map(|f| [Some(f.name), f.short]).flatten().collect();
+        let count = names.len();
+        names.sort();
+        names.dedup();
+        assert_eq!(names.len(), count);
+    }
+
+    /// Help lists every flag once, with its help, and the synopses hold only what the
+    /// commands take.
+    #[test]
+    fn usage_lists_every_flag() {
+        let text = usage();
+        for flag in FLAGS {
+            assert_eq!(text.matches(&format!("\n  {} ", flag.spelled())).count(), 1, "{}", flag.name);
+            assert!(text.contains(flag.help.lines().next().unwrap()), "{}", flag.name);
+        }
+        assert!(text.contains("Usage: raycaster -input SCENE -size W H [-output FILE]"), "{text}");
+        assert!(text.contains("raycaster batch FILE [--backend gpu|cpu|auto] [--shard K/N]\n"), "{text}");
+        let compare = text.split("raycaster compare").nth(1).unwrap().split("  Renders").next().unwrap();
+        assert!(!compare.contains("--backend") && !compare.contains("--tile"), "{compare}");
+        for verb in [Render, Compare, Batch, Stitch, Bench] {
+            let lines = synopsis("raycaster", verb, "");
+            assert!(lines.lines().all(|l| l.chars().count() <= WIDTH), "{lines}");
+        }
+    }
+
+    #[test]
+    fn verbs_by_first_word() {
+        assert_eq!(Verb::of_first(Some("stitch")), Stitch);
+        assert_eq!(Verb::of_first(Some("-input")), Render);
+        assert_eq!(Verb::of_first(None), Render);
+    }
+}
