@@ -17,7 +17,7 @@ use crate::render::{Frame, RenderOptions, SphereTest, TriangleTest};
 use crate::scene::Scene;
 use flatten::SceneBuffers;
 use layout::PixelLayout;
-pub use prepared::{PackedTile, PreparedScene};
+pub use prepared::{PreparedScene, ReadTile};
 use std::collections::HashMap;
 use std::sync::Mutex;
 
@@ -237,7 +237,7 @@ pub struct RenderStats {
     /// Dispatches the image took.
     pub tiles: u32,
     /// Time to build the hierarchy or the bins on the CPU, when the scene got one.
-    pub bvh_build_ms: Option<f64>,
+    pub acceleration_build_ms: Option<f64>,
     /// Time to flatten the scene into buffers (BVH build included) and upload them.
     pub prepare_ms: f64,
     /// Bytes of scene data uploaded (primitives, materials, lights, hierarchy, bins).
