@@ -4,15 +4,17 @@
 
 use raycaster::bvh::BvhNode;
 use raycaster::gpu::layout::{
-    BinItem, EyeTriangle, GpuEllipsoid, GpuLight, GpuPlane, GpuSphere, GpuTriangle, Params, PixelLayout,
+    BinItem, EyeTriangle, GpuEllipsoid, GpuLight, GpuMaterial, GpuPlane, GpuSphere, GpuTriangle, Params, PixelLayout,
+    PrimitiveKind, REF_KIND_SHIFT,
 };
-use raycaster::gpu::SHADER_SOURCE;
+use raycaster::gpu::shader;
 use raycaster::gpu::{KernelConfig, BINDINGS};
 use raycaster::render::{Outputs, SphereTest, TriangleTest};
 use std::mem::{offset_of, size_of};
 
 fn module() -> naga::Module {
-    naga::front::wgsl::parse_str(SHADER_SOURCE).unwrap_or_else(|e| panic!("{}", e.emit_to_string(SHADER_SOURCE)))
+    let source = shader::source();
+    naga::front::wgsl::parse_str(source).unwrap_or_else(|e| panic!("{}", e.emit_to_string(source)))
 }
 
 /// (size, [(member name, offset)]) of the WGSL struct `name`.
@@ -43,7 +45,7 @@ fn shader_parses_and_validates() {
     let module = module();
     naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::default())
         .validate(&module)
-        .unwrap_or_else(|e| panic!("{}", e.emit_to_string(SHADER_SOURCE)));
+        .unwrap_or_else(|e| panic!("{}", e.emit_to_string(shader::source())));
 }
 
 #[test]
@@ -110,6 +112,19 @@ fn host_structs_match_the_shader() {
             ("material", offset_of!(GpuTriangle, material)),
             ("v1", offset_of!(GpuTriangle, v1)),
             ("v2", offset_of!(GpuTriangle, v2)),
+        ],
+    );
+    check(
+        &m,
+        "Material",
+        size_of::<GpuMaterial>(),
+        &[
+            ("diffuse", offset_of!(GpuMaterial, diffuse)),
+            ("exponent", offset_of!(GpuMaterial, exponent)),
+            ("specular", offset_of!(GpuMaterial, specular)),
+            ("index_of_refraction", offset_of!(GpuMaterial, index_of_refraction)),
+            ("reflective", offset_of!(GpuMaterial, reflective)),
+            ("transparent", offset_of!(GpuMaterial, transparent)),
         ],
     );
     check(
@@ -223,7 +238,7 @@ fn algorithm_values_match_the_shader() {
     for (name, test) in triangle {
         assert_eq!(shader_constant(&m, name), naga::Literal::U32(test as u32), "{name}");
     }
-    for (name, test) in [("SPHERE_NAIVE", SphereTest::Naive), ("SPHERE_PRECISE", SphereTest::Robust)] {
+    for (name, test) in [("SPHERE_NAIVE", SphereTest::Naive), ("SPHERE_ROBUST", SphereTest::Robust)] {
         assert_eq!(shader_constant(&m, name), naga::Literal::U32(test as u32), "{name}");
     }
 }
@@ -252,12 +267,49 @@ fn bvh_constants_match_the_builder() {
         naga::Literal::F32(v) => assert_eq!(v, raycaster::bvh::SLAB_MARGIN, "{v:e}"),
         other => panic!("{other:?}"),
     }
-    let refs = [
-        ("REF_TRIANGLE", raycaster::gpu::layout::REF_TRIANGLE),
-        ("REF_SPHERE", raycaster::gpu::layout::REF_SPHERE),
-        ("REF_ELLIPSOID", raycaster::gpu::layout::REF_ELLIPSOID),
-    ];
-    for (name, value) in refs {
-        assert_eq!(shader_constant(&m, name), naga::Literal::U32(value), "{name}");
+}
+
+/// The kernel numbers primitive kinds as the host does (`PrimitiveKind`, from which the
+/// host encodes references into `prim_refs` and the bins), and decodes references with the
+/// same shift.
+#[test]
+fn primitive_kinds_match_the_host() {
+    let m = module();
+    assert_eq!(PrimitiveKind::Triangle as u32, 0, "a triangle's reference is its index");
+    for kind in PrimitiveKind::ALL {
+        assert_eq!(shader_constant(&m, kind.wgsl_name()), naga::Literal::U32(kind as u32), "{kind:?}");
     }
+    assert_eq!(shader_constant(&m, "REF_KIND_SHIFT"), naga::Literal::U32(REF_KIND_SHIFT));
+    let kinds: Vec<String> =
+        m.constants.iter().filter_map(|(_, c)| c.name.clone()).filter(|n| n.starts_with("KIND_")).collect();
+    assert_eq!(kinds.len(), PrimitiveKind::ALL.len(), "{kinds:?}: a kind the host does not know");
+}
+
+/// The sizes the host dispatches and bins with are the kernel's: its workgroup (both entry
+/// points), its packet of rays, and the side of a bin it derives its bin index from.
+#[test]
+fn sizes_match_the_host() {
+    let m = module();
+    assert_eq!(shader_constant(&m, "PACKET"), naga::Literal::U32(raycaster::gpu::BIN_PACKET));
+    assert_eq!(shader_constant(&m, "BIN_SIDE"), naga::Literal::U32(raycaster::gpu::binning::BIN_SIDE));
+    assert_eq!(shader_constant(&m, "WORKGROUP"), naga::Literal::U32(raycaster::gpu::WORKGROUP));
+    let names: Vec<&str> = m.entry_points.iter().map(|e| e.name.as_str()).collect();
+    assert_eq!(names.len(), 2, "{names:?}");
+    for entry in &m.entry_points {
+        let w = raycaster::gpu::WORKGROUP;
+        assert_eq!(entry.workgroup_size, [w, w, 1], "{}", entry.name);
+    }
+}
+
+/// The any-hit query exists and has the signature shadow rays will call, though no entry
+/// point calls it yet (validated with the rest by `shader_parses_and_validates`).
+#[test]
+fn any_hit_query_is_declared() {
+    let m = module();
+    let (_, f) =
+        m.functions.iter().find(|(_, f)| f.name.as_deref() == Some("occluded")).expect("fn occluded in the kernel");
+    let arguments: Vec<&str> = f.arguments.iter().filter_map(|a| a.name.as_deref()).collect();
+    assert_eq!(arguments, ["ray", "tmin", "tmax"]);
+    let result = f.result.as_ref().expect("occluded returns a value");
+    assert_eq!(m.types[result.ty].inner, naga::TypeInner::Scalar(naga::Scalar::BOOL));
 }

@@ -132,7 +132,7 @@ pub fn run_case(gpu: &GpuRenderer, case: &Case, runs: usize) -> Result<Row, GpuE
         let elapsed = start.elapsed().as_secs_f64() * 1e3;
         wall.push(elapsed);
         timestamps = stats.kernel_ns.is_some();
-        bvh_build_ms = bvh_build_ms.or(stats.bvh_build_ms);
+        bvh_build_ms = bvh_build_ms.or(stats.acceleration_build_ms);
         used = stats.acceleration;
         scene_bytes = stats.scene_bytes;
         kernel.push(stats.kernel_ns.map_or(elapsed, |ns| ns as f64 / 1e6));

@@ -71,7 +71,7 @@ impl Report {
             ));
             // The parts of the GPU's rendering time that it measures on its own.
             time += &format!(" (preparing {:.1} ms: buffers, pipeline, upload", stats.prepare_ms);
-            if let Some(bvh) = stats.bvh_build_ms {
+            if let Some(bvh) = stats.acceleration_build_ms {
                 time += &format!("; hierarchy {bvh:.1} ms of it");
             }
             if let Some(ns) = stats.kernel_ns {

@@ -13,7 +13,7 @@
 //! Triangles are tested against the rays' shared origin (perspective) or direction
 //! (orthographic) with edge planes computed once per frame ([`EyeTriangle`]).
 
-use super::layout::{BinItem, EyeTriangle, GpuTriangle, REF_ELLIPSOID, REF_SPHERE, REF_TRIANGLE};
+use super::layout::{BinItem, EyeTriangle, GpuTriangle, PrimitiveKind};
 use crate::bvh::Aabb;
 use crate::camera::PrimaryRays;
 use glam::{DVec3, Vec3};
@@ -38,7 +38,7 @@ pub struct Bins {
     pub build_ms: f64,
 }
 
-/// A finite primitive to bin: its reference (`kind << 30 | index`) and its bounds.
+/// A finite primitive to bin: its reference ([`PrimitiveKind::reference`]) and its bounds.
 pub struct Candidate {
     pub reference: u32,
     pub bounds: Aabb,
@@ -126,16 +126,16 @@ pub fn candidates(triangles: &[GpuTriangle], sphere_bounds: &[Aabb], ellipsoid_b
     for (k, t) in triangles.iter().enumerate() {
         let points = [Vec3::from(t.v0), Vec3::from(t.v1), Vec3::from(t.v2)];
         out.push(Candidate {
-            reference: REF_TRIANGLE << 30 | k as u32,
+            reference: PrimitiveKind::Triangle.reference(k),
             bounds: Aabb::of_points(&points),
             points: Some(points),
         });
     }
     for (k, b) in sphere_bounds.iter().enumerate() {
-        out.push(Candidate { reference: REF_SPHERE << 30 | k as u32, bounds: *b, points: None });
+        out.push(Candidate { reference: PrimitiveKind::Sphere.reference(k), bounds: *b, points: None });
     }
     for (k, b) in ellipsoid_bounds.iter().enumerate() {
-        out.push(Candidate { reference: REF_ELLIPSOID << 30 | k as u32, bounds: *b, points: None });
+        out.push(Candidate { reference: PrimitiveKind::Ellipsoid.reference(k), bounds: *b, points: None });
     }
     out
 }

@@ -25,8 +25,7 @@ pub struct SceneBuffers {
     pub ellipsoids: Vec<GpuEllipsoid>,
     pub planes: Vec<GpuPlane>,
     pub triangles: Vec<GpuTriangle>,
-    /// Diffuse colours, xyz used.
-    pub materials: Vec<[f32; 4]>,
+    pub materials: Vec<GpuMaterial>,
     pub lights: Vec<GpuLight>,
     /// The hierarchy over spheres, ellipsoids and triangles, when the scene has enough of
     /// them to profit ([`BVH_MIN_PRIMITIVES`]).
@@ -65,7 +64,7 @@ pub const LOOP_LIMIT: u32 = 65535;
 #[derive(Clone, Debug, Default)]
 pub struct GpuBvh {
     pub nodes: Vec<BvhNode>,
-    /// `kind << 30 | index` per leaf slot (kinds as in the kernel's `REF_*`); empty when the
+    /// A reference ([`PrimitiveKind::reference`]) per leaf slot; empty when the
     /// hierarchy holds triangles alone, which are then stored in leaf order instead.
     pub prim_refs: Vec<u32>,
     /// Leaf slot → primitive (the builder's order).
@@ -84,7 +83,7 @@ impl SceneBuffers {
         if let Some(bvh) = buffers.bvh.as_ref().filter(|b| b.prim_refs.is_empty()) {
             buffers.triangles = bvh.order.iter().map(|&p| buffers.triangles[p as usize]).collect();
         }
-        buffers.materials = scene.materials.iter().map(|m| m.diffuse.as_vec3().extend(0.0).to_array()).collect();
+        buffers.materials = scene.materials.iter().map(GpuMaterial::new).collect();
         buffers.lights = scene
             .lights
             .iter()
@@ -157,15 +156,15 @@ impl SceneBuffers {
         let mut refs = Vec::with_capacity(finite);
         for (k, t) in self.triangles.iter().enumerate() {
             bounds.push(Aabb::of_points(&[Vec3::from(t.v0), Vec3::from(t.v1), Vec3::from(t.v2)]));
-            refs.push(REF_TRIANGLE << 30 | k as u32);
+            refs.push(PrimitiveKind::Triangle.reference(k));
         }
         for (k, b) in self.sphere_bounds.iter().enumerate() {
             bounds.push(*b);
-            refs.push(REF_SPHERE << 30 | k as u32);
+            refs.push(PrimitiveKind::Sphere.reference(k));
         }
         for (k, b) in self.ellipsoid_bounds.iter().enumerate() {
             bounds.push(*b);
-            refs.push(REF_ELLIPSOID << 30 | k as u32);
+            refs.push(PrimitiveKind::Ellipsoid.reference(k));
         }
         let bvh = Bvh::build(&bounds);
         let prim_refs = if self.spheres.is_empty() && self.ellipsoids.is_empty() {

@@ -1,6 +1,7 @@
-//! The host twins of the structs in `shaders/raycast.wgsl`: `#[repr(C)]`, `Pod`, padding
+//! The host twins of the structs in `shaders/params.wgsl`: `#[repr(C)]`, `Pod`, padding
 //! spelled out, with the same size and field offsets as naga reports for the WGSL side
-//! (checked by `tests/layout.rs`), and the per-pixel word layout of the kernel's output.
+//! (checked by `tests/layout.rs`); the numbering of primitive kinds; and the per-pixel
+//! word layout of the kernel's output.
 
 use crate::render::{Frame, Output, Outputs, Pixel, RenderOptions};
 use bytemuck::{Pod, Zeroable};
@@ -76,13 +77,43 @@ pub struct EyeTriangle {
     pub plane: [f32; 4],
 }
 
-/// WGSL `BinItem`: a primitive listed in a screen bin (`kind << 30 | index`), and a lower
+/// WGSL `BinItem`: a primitive listed in a screen bin ([`PrimitiveKind::reference`]), and a lower
 /// bound of the distance at which a primary ray can meet it.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct BinItem {
     pub reference: u32,
     pub near: f32,
+}
+
+/// WGSL `Material`: [`crate::scene::Material`] in f32, each colour paired with a scalar
+/// in 16 bytes as WGSL aligns a `vec3<f32>`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuMaterial {
+    pub diffuse: [f32; 3],
+    pub exponent: f32,
+    pub specular: [f32; 3],
+    pub index_of_refraction: f32,
+    pub reflective: [f32; 3],
+    pub _pad0: u32,
+    pub transparent: [f32; 3],
+    pub _pad1: u32,
+}
+
+impl GpuMaterial {
+    pub fn new(m: &crate::scene::Material) -> GpuMaterial {
+        let f = |v: glam::DVec3| v.as_vec3().to_array();
+        GpuMaterial {
+            diffuse: f(m.diffuse),
+            exponent: m.exponent as f32,
+            specular: f(m.specular),
+            index_of_refraction: m.index_of_refraction as f32,
+            reflective: f(m.reflective),
+            transparent: f(m.transparent),
+            ..Default::default()
+        }
+    }
 }
 
 /// WGSL `Light`.
@@ -144,7 +175,41 @@ impl PixelLayout {
     }
 }
 
-/// Primitive kinds in a `prim_refs` entry (the kernel's `REF_*` constants).
-pub const REF_TRIANGLE: u32 = 0;
-pub const REF_SPHERE: u32 = 1;
-pub const REF_ELLIPSOID: u32 = 2;
+/// The kinds of primitive, one numbering for the host and the kernel (whose `KIND_*`
+/// constants [`super::shader::host_constants`] generates from this): a nearest hit names
+/// its kind, and a reference in `prim_refs` or a bin is `kind << REF_KIND_SHIFT | index`.
+/// Triangles are 0, so that a reference to a triangle is its index: with triangles alone
+/// the kernel skips the decoding.
+#[repr(u32)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum PrimitiveKind {
+    Triangle = 0,
+    Sphere = 1,
+    Ellipsoid = 2,
+    /// Never referenced (planes stay outside the bins and the hierarchy), but a hit.
+    Plane = 3,
+}
+
+/// Bits of a reference below its kind: 2³⁰ primitives of each kind at most.
+pub const REF_KIND_SHIFT: u32 = 30;
+
+impl PrimitiveKind {
+    pub const ALL: [PrimitiveKind; 4] =
+        [PrimitiveKind::Triangle, PrimitiveKind::Sphere, PrimitiveKind::Ellipsoid, PrimitiveKind::Plane];
+
+    /// The name of the kernel's constant.
+    pub fn wgsl_name(self) -> &'static str {
+        match self {
+            PrimitiveKind::Triangle => "KIND_TRIANGLE",
+            PrimitiveKind::Sphere => "KIND_SPHERE",
+            PrimitiveKind::Ellipsoid => "KIND_ELLIPSOID",
+            PrimitiveKind::Plane => "KIND_PLANE",
+        }
+    }
+
+    /// The reference to primitive `index` of this kind.
+    pub fn reference(self, index: usize) -> u32 {
+        debug_assert!(index < 1 << REF_KIND_SHIFT);
+        (self as u32) << REF_KIND_SHIFT | index as u32
+    }
+}

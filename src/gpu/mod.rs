@@ -3,32 +3,34 @@
 //! A [`GpuRenderer`] owns the device (created once per process, reused for any number of
 //! scenes) and a cache of kernels specialised by `override` constants.
 //! [`GpuRenderer::prepare`] flattens a scene ([`flatten`], into the structs of [`layout`]),
-//! uploads it and binds it once; the [`PreparedScene`] then dispatches one invocation per
-//! pixel in tiles of rows (so memory is bounded by the tile, not the frame), reading tile k
-//! back while the device renders tile k + 1.
+//! uploads it and binds it once; the [`PreparedScene`] then dispatches the kernel
+//! ([`shader`]; an invocation per pixel, or per packet of pixels with bins) in tiles of rows
+//! (so memory is bounded by the tile, not the frame), reading tile k back while the device
+//! renders tile k + 1.
 
 pub mod binning;
 pub mod flatten;
 pub mod layout;
 pub mod precision;
 mod prepared;
+pub mod shader;
 
 use crate::render::{Frame, Output, RenderOptions, SphereTest, TriangleTest};
 use crate::scene::Scene;
 use flatten::SceneBuffers;
 use layout::PixelLayout;
-pub use prepared::{PackedTile, PreparedScene};
+pub use prepared::{PreparedScene, ReadTile};
 use std::collections::HashMap;
 use std::sync::Mutex;
 
-/// The kernel's source, compiled into the binary.
-pub const SHADER_SOURCE: &str = include_str!("../../shaders/raycast.wgsl");
-
-/// Workgroup edge, as in `@workgroup_size(8, 8)`.
-const WORKGROUP: u32 = 8;
+/// Workgroup edge: the kernel's `@workgroup_size(WORKGROUP, WORKGROUP)`, and a bin's side.
+pub const WORKGROUP: u32 = 8;
 
 /// The packet of a kernel walking bins (see [`KernelConfig::packet`]).
-const BIN_PACKET: u32 = 4;
+pub const BIN_PACKET: u32 = 4;
+
+// A packet never straddles two bins (the kernel's `main_bins` relies on it).
+const _: () = assert!(binning::BIN_SIDE % BIN_PACKET == 0);
 
 /// The output tile of one dispatch. Small tiles stay in the CPU's caches on lavapipe:
 /// bunny_40k at 2048² ran at 7.4 Mrays/s with 64 MiB tiles, 9.3 with 16 MiB, 9.8 with 8 MiB,
@@ -136,7 +138,6 @@ impl KernelConfig {
         }
     }
 
-    /// The values for `PipelineCompilationOptions::constants`.
     /// Pixels each invocation renders, stacked in a column (the kernel's `PACKET` in
     /// `main_bins`): 4 rays share each load from a bin; `main` renders one pixel.
     pub fn packet(&self) -> u32 {
@@ -156,6 +157,7 @@ impl KernelConfig {
         }
     }
 
+    /// The values for `PipelineCompilationOptions::constants`.
     pub fn constants(&self) -> [(&'static str, f64); 16] {
         let b = |v: bool| if v { 1.0 } else { 0.0 };
         [
@@ -192,7 +194,7 @@ const fn binding<T>(name: &'static str, writable: bool) -> Binding {
     Binding { name, writable, element_bytes: std::mem::size_of::<T>() as u64 }
 }
 
-/// Every binding of `shaders/raycast.wgsl`, index = `@binding`. The bind-group layout and
+/// Every binding of the kernel (`shaders/params.wgsl`), index = `@binding`. The bind-group layout and
 /// every bind group are built from this table, and `tests/layout.rs` checks it against the
 /// shader's own declarations (names, order, access, element sizes).
 pub const BINDINGS: [Binding; 13] = [
@@ -201,7 +203,7 @@ pub const BINDINGS: [Binding; 13] = [
     binding::<layout::GpuEllipsoid>("ellipsoids", false),
     binding::<layout::GpuPlane>("planes", false),
     binding::<layout::GpuTriangle>("triangles", false),
-    binding::<[f32; 4]>("materials", false),
+    binding::<layout::GpuMaterial>("materials", false),
     binding::<layout::GpuLight>("lights", false),
     binding::<u32>("pixels", true),
     binding::<crate::bvh::BvhNode>("nodes", false),
@@ -237,7 +239,7 @@ pub struct RenderStats {
     /// Dispatches the image took.
     pub tiles: u32,
     /// Time to build the hierarchy or the bins on the CPU, when the scene got one.
-    pub bvh_build_ms: Option<f64>,
+    pub acceleration_build_ms: Option<f64>,
     /// Time to flatten the scene into buffers (BVH build included) and upload them.
     pub prepare_ms: f64,
     /// Bytes of scene data uploaded (primitives, materials, lights, hierarchy, bins).
@@ -297,8 +299,8 @@ impl GpuRenderer {
         options: GpuOptions,
     ) -> GpuRenderer {
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("raycast.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(SHADER_SOURCE.into()),
+            label: Some("raycast"),
+            source: wgpu::ShaderSource::Wgsl(shader::source().into()),
         });
         let entries: Vec<_> = BINDINGS.iter().enumerate().map(|(k, b)| layout_entry(k as u32, b)).collect();
         let bind_group_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {

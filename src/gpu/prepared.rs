@@ -36,8 +36,9 @@ struct Slot {
     timer: Option<Timer>,
 }
 
-/// One tile as the kernel wrote it: `rows` full image rows from `first_row` (from the top).
-pub struct PackedTile<'a> {
+/// One tile as the kernel wrote it and the host read it back, floats or packed 8-bit words
+/// (its [`PixelLayout`]): `rows` full image rows from `first_row` (from the top).
+pub struct ReadTile<'a> {
     pub first_row: u32,
     pub rows: u32,
     width: u32,
@@ -90,7 +91,11 @@ impl<'a> PreparedScene<'a> {
             stats: RenderStats {
                 kernel_ns: gpu.timestamps.then_some(0),
                 tiles: 0,
-                bvh_build_ms: buffers.bvh.as_ref().map(|b| b.build_ms).or(buffers.bins.as_ref().map(|b| b.build_ms)),
+                acceleration_build_ms: buffers
+                    .bvh
+                    .as_ref()
+                    .map(|b| b.build_ms)
+                    .or(buffers.bins.as_ref().map(|b| b.build_ms)),
                 prepare_ms: start.elapsed().as_secs_f64() * 1e3,
                 scene_bytes,
                 acceleration: buffers.acceleration(),
@@ -99,10 +104,7 @@ impl<'a> PreparedScene<'a> {
     }
 
     /// Renders every tile, top first, handing each to `on_tile` on the calling thread.
-    pub fn render<E: From<GpuError>>(
-        &self,
-        on_tile: impl FnMut(&PackedTile) -> Result<(), E>,
-    ) -> Result<RenderStats, E> {
+    pub fn render<E: From<GpuError>>(&self, on_tile: impl FnMut(&ReadTile) -> Result<(), E>) -> Result<RenderStats, E> {
         self.render_band(0, self.options.height, on_tile)
     }
 
@@ -112,7 +114,7 @@ impl<'a> PreparedScene<'a> {
         &self,
         first: u32,
         rows: u32,
-        mut on_tile: impl FnMut(&PackedTile) -> Result<(), E>,
+        mut on_tile: impl FnMut(&ReadTile) -> Result<(), E>,
     ) -> Result<RenderStats, E> {
         assert!(first + rows <= self.options.height, "the band lies inside the image");
         let tiles: Vec<(u32, u32)> = row_tiles(rows, self.tile_rows).map(|(offset, n)| (first + offset, n)).collect();
@@ -154,14 +156,14 @@ impl<'a> PreparedScene<'a> {
         slot: usize,
         first_row: u32,
         rows: u32,
-        on_tile: &mut impl FnMut(&PackedTile) -> Result<(), E>,
+        on_tile: &mut impl FnMut(&ReadTile) -> Result<(), E>,
     ) -> Result<(), E> {
         let readback = &self.slots[slot].readback;
         let range = readback.slice(..self.tile_bytes(rows));
         let result = {
             let view = range.get_mapped_range().map_err(|e| GpuError::Readback(e.to_string()))?;
             let words: &[u32] = bytemuck::cast_slice(&view);
-            on_tile(&PackedTile {
+            on_tile(&ReadTile {
                 first_row,
                 rows,
                 width: self.options.width,
@@ -317,7 +319,7 @@ pub(super) fn map_and_wait(
     receiver.recv().map_err(|e| GpuError::Readback(e.to_string()))?.map_err(|e| GpuError::Readback(e.to_string()))
 }
 
-impl PackedTile<'_> {
+impl ReadTile<'_> {
     /// The tile as float buffers (a render prepared with `packed = false`).
     pub fn to_frame(&self) -> Frame {
         assert!(!self.layout.packed, "a packed tile holds 8-bit images, not floats");

@@ -1,0 +1,79 @@
+// Screen-space bins (gpu::binning): a workgroup's BIN_SIDE × BIN_SIDE pixels walk one list
+// of candidates, nearest first, the same for every invocation, in packets of PACKET rays.
+
+// The edge functions of a primary ray against a triangle's edge planes: all of one sign
+// (or zero) when the ray's line meets the triangle, edges included. Watertight (see
+// gpu::binning::EyeTriangle): a shared edge's plane is negated bit for bit in its two
+// triangles. Then t from the triangle's plane; a ray in that plane never hits. The
+// non-short-circuit & and | keep it free of branches.
+fn eye_triangle_t(tri: EyeTriangle, ray: Ray, tmin: f32) -> f32 {
+    var q = ray.direction;
+    if (ORTHOGRAPHIC) {
+        q = ray.origin;
+    }
+    let e0 = dot(tri.e0.xyz, q) - tri.e0.w;
+    let e1 = dot(tri.e1.xyz, q) - tri.e1.w;
+    let e2 = dot(tri.e2.xyz, q) - tri.e2.w;
+    let inside = ((e0 >= 0.0) & (e1 >= 0.0) & (e2 >= 0.0)) | ((e0 <= 0.0) & (e1 <= 0.0) & (e2 <= 0.0));
+    let denominator = dot(tri.plane.xyz, ray.direction);
+    var numerator = tri.plane.w;
+    if (ORTHOGRAPHIC) {
+        numerator -= dot(tri.plane.xyz, ray.origin);
+    }
+    let t = numerator / select(1.0, denominator, denominator != 0.0);
+    return select(NO_HIT, t_if_above(t, tmin), inside & (denominator != 0.0));
+}
+
+fn try_eye_triangle(k: u32, ray: Ray, tmin: f32, best: Closest) -> Closest {
+    let t = eye_triangle_t(eye_triangles[k], ray, tmin);
+    return nearer(best, t, KIND_TRIANGLE, k);
+}
+
+// With bins, the watertight test takes its primary-ray form (the same guarantee, from
+// planes computed once per frame); the other tests stay as they are, to be compared.
+fn try_binned_triangle(k: u32, ray: Ray, shear: Shear, tmin: f32, best: Closest) -> Closest {
+    if (TRIANGLE_TEST == TRIANGLE_WATERTIGHT) {
+        return try_eye_triangle(k, ray, tmin, best);
+    }
+    return try_triangle(k, ray, shear, tmin, best);
+}
+
+// The packet's rays and closest hits so far. Every loop over them has the constant trip
+// count PACKET, which the compiler unrolls, so they live in registers; a loop left rolled
+// would also count against lavapipe's 65535 iterations per invocation (docs/lavapipe.md).
+var<private> packet_rays: array<Ray, PACKET>;
+var<private> packet_hits: array<Closest, PACKET>;
+
+// The closest hits of the packet among the primitives listed in its bin, nearest first.
+// The list, and so the loop, is the same for every invocation of the workgroup. Each item
+// is loaded once and tested against the PACKET rays (on lavapipe a load costs a gather per
+// lane group even when every lane reads one address: docs/lavapipe.md); the walk stops
+// once every ray's closest hit is nearer than the next item can be.
+fn walk_bin_packet(bin: u32, tmin: f32) {
+    let range = bin_ranges[bin];
+    var shears: array<Shear, PACKET>;
+    for (var r = 0u; r < PACKET; r++) {
+        shears[r] = shear_for(packet_rays[r].direction);
+    }
+    for (var k = range.x; k < range.x + range.y; k++) {
+        let item = bin_items[k];
+        var farthest = packet_hits[0].t;
+        for (var r = 1u; r < PACKET; r++) {
+            farthest = max(farthest, packet_hits[r].t);
+        }
+        if (item.near > farthest) {
+            break;
+        }
+        let reference = item.reference;
+        if (!HAS_SPHERES && !HAS_ELLIPSOIDS && TRIANGLE_TEST == TRIANGLE_WATERTIGHT) {
+            let tri = eye_triangles[reference];
+            for (var r = 0u; r < PACKET; r++) {
+                packet_hits[r] = nearer(packet_hits[r], eye_triangle_t(tri, packet_rays[r], tmin), KIND_TRIANGLE, reference);
+            }
+            continue;
+        }
+        for (var r = 0u; r < PACKET; r++) {
+            packet_hits[r] = try_ref(reference, packet_rays[r], shears[r], tmin, packet_hits[r], true);
+        }
+    }
+}

@@ -1,0 +1,60 @@
+// The entry points. `main` renders one pixel per invocation; `main_bins` a packet of
+// PACKET pixels stacked in a column, so that every primitive loaded from a bin is tested
+// against PACKET rays. Without bins an invocation stays at one pixel: lavapipe stops an
+// invocation's loops after 65535 iterations in all (docs/lavapipe.md), which PACKET flat
+// walks over many primitives would reach. Two entry points, not an override: wgpu compiles
+// only what the chosen one reaches, and lavapipe would otherwise compile the other's code
+// before dropping it. (The host's gpu::KernelConfig::packet and entry_point.)
+
+// Shades and writes tile-local row `row` of column i, when it belongs to this tile.
+fn finish_pixel(i: u32, row: i32, ray: Ray, hit: Closest) {
+    if (row < 0 || row >= i32(P.tile_rows)) {
+        return;
+    }
+    let index = u32(row) * P.width + i;
+    if (hit.t == NO_HIT) {
+        write_pixel(index, false, P.background, vec3<f32>(0.0), 0.0);
+        return;
+    }
+    let surface = surface_at(hit, ray);
+    var color = vec3<f32>(0.0);
+    if (WANT_COLOR) {
+        color = shade(surface, ray);
+    }
+    write_pixel(index, true, color, surface.normal, hit.t);
+}
+
+@compute @workgroup_size(WORKGROUP, WORKGROUP)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    P = params;
+    let i = id.x;
+    let row = id.y;
+    if (i >= P.width || row >= P.tile_rows) {
+        return;
+    }
+    let ray = ray_of_row(i, P.first_row + row);
+    finish_pixel(i, i32(row), ray, closest_hit(ray));
+}
+
+// Image rows base + PACKET·y … + PACKET − 1, where base is the tile's first row rounded
+// down to a multiple of PACKET, so that a packet never straddles two bins (BIN_SIDE rows, a
+// multiple of PACKET) whatever the tile.
+@compute @workgroup_size(WORKGROUP, WORKGROUP)
+fn main_bins(@builtin(global_invocation_id) id: vec3<u32>) {
+    P = params;
+    let i = id.x;
+    let base = P.first_row - P.first_row % PACKET + id.y * PACKET;
+    let first = i32(base) - i32(P.first_row);
+    if (i >= P.width || first >= i32(P.tile_rows)) {
+        return;
+    }
+    let tmin = t_min();
+    for (var r = 0u; r < PACKET; r++) {
+        packet_rays[r] = ray_of_row(i, base + r);
+        packet_hits[r] = closest_plane(packet_rays[r], tmin);
+    }
+    walk_bin_packet((base / BIN_SIDE) * P.bin_columns + i / BIN_SIDE, tmin);
+    for (var r = 0u; r < PACKET; r++) {
+        finish_pixel(i, first + i32(r), packet_rays[r], packet_hits[r]);
+    }
+}

@@ -1,0 +1,51 @@
+// The words a pixel leaves in `pixels` (gpu::layout::PixelLayout decodes them).
+
+// floor(255·clamp(v, 0, 1)) per channel, as image_io::quantize (NaN → 0; docs/SPEC.md §5),
+// packed r | g << 8 | b << 16.
+fn pack_rgb8(c: vec3<f32>) -> u32 {
+    let q = vec3<u32>(floor(255.0 * clamp(select(c, vec3<f32>(0.0), c != c), vec3<f32>(0.0), vec3<f32>(1.0))));
+    return q.x | (q.y << 8u) | (q.z << 16u);
+}
+
+// The 8-bit images, one word each: colour, |N| (black on a miss), and t as bits for the
+// host to quantise in f64 as the reference does (all ones on a miss).
+fn write_packed_pixel(index: u32, hit: bool, color: vec3<f32>, normal: vec3<f32>, t: f32) {
+    var w = index * PIXEL_WORDS;
+    if (WANT_COLOR) {
+        pixels[w] = pack_rgb8(color);
+        w += 1u;
+    }
+    if (WANT_NORMAL) {
+        pixels[w] = select(0u, pack_rgb8(abs(normal)), hit);
+        w += 1u;
+    }
+    if (WANT_DEPTH) {
+        pixels[w] = select(0xffffffffu, bitcast<u32>(t), hit);
+    }
+}
+
+// Writes one pixel: the hit flag, then only the outputs asked for.
+fn write_pixel(index: u32, hit: bool, color: vec3<f32>, normal: vec3<f32>, t: f32) {
+    if (PACKED_8BIT) {
+        write_packed_pixel(index, hit, color, normal, t);
+        return;
+    }
+    var w = index * PIXEL_WORDS;
+    pixels[w] = select(0u, 1u, hit);
+    w += 1u;
+    if (WANT_COLOR) {
+        pixels[w] = bitcast<u32>(color.x);
+        pixels[w + 1u] = bitcast<u32>(color.y);
+        pixels[w + 2u] = bitcast<u32>(color.z);
+        w += 3u;
+    }
+    if (WANT_NORMAL) {
+        pixels[w] = bitcast<u32>(normal.x);
+        pixels[w + 1u] = bitcast<u32>(normal.y);
+        pixels[w + 2u] = bitcast<u32>(normal.z);
+        w += 3u;
+    }
+    if (WANT_DEPTH) {
+        pixels[w] = bitcast<u32>(t);
+    }
+}

@@ -1,0 +1,112 @@
+// Ray/triangle, three ways, so that the course's comparison of methods is a measurement
+// (--triangle-test; README "Accuracy"). Edges count as inside; both sides hit.
+
+fn triangle_t(tri: Triangle, ray: Ray, shear: Shear, tmin: f32) -> f32 {
+    if (TRIANGLE_TEST == TRIANGLE_CRAMER) {
+        return triangle_t_cramer(tri, ray, tmin);
+    }
+    if (TRIANGLE_TEST == TRIANGLE_MOLLER) {
+        return triangle_t_moller(tri, ray, tmin);
+    }
+    return triangle_t_watertight(tri, ray, shear, tmin);
+}
+
+// Cramer's rule on α·(a − c) + β·(b − c) + c = o + t·d, as the seed notes derive it.
+fn triangle_t_cramer(tri: Triangle, ray: Ray, tmin: f32) -> f32 {
+    let e1 = tri.v0 - tri.v2;
+    let e2 = tri.v1 - tri.v2;
+    let oc = ray.origin - tri.v2;
+    let n = cross(e1, e2);
+    let det = -dot(ray.direction, n);
+    if (det == 0.0) {
+        return NO_HIT;
+    }
+    let alpha = -dot(ray.direction, cross(oc, e2)) / det;
+    let beta = -dot(ray.direction, cross(e1, oc)) / det;
+    if (alpha < 0.0 || beta < 0.0 || alpha + beta > 1.0) {
+        return NO_HIT;
+    }
+    return t_if_above(dot(oc, n) / det, tmin);
+}
+
+// Möller, Trumbore, "Fast, Minimum Storage Ray/Triangle Intersection", JGT 2(1), 1997.
+fn triangle_t_moller(tri: Triangle, ray: Ray, tmin: f32) -> f32 {
+    let e1 = tri.v1 - tri.v0;
+    let e2 = tri.v2 - tri.v0;
+    let p = cross(ray.direction, e2);
+    let det = dot(e1, p);
+    if (det == 0.0) {
+        return NO_HIT;
+    }
+    let inv = 1.0 / det;
+    let s = ray.origin - tri.v0;
+    let u = dot(s, p) * inv;
+    let q = cross(s, e1);
+    let v = dot(ray.direction, q) * inv;
+    if (u < 0.0 || v < 0.0 || u + v > 1.0) {
+        return NO_HIT;
+    }
+    return t_if_above(dot(e2, q) * inv, tmin);
+}
+
+// Per-ray set-up of the watertight test: the axis permutation that makes the ray's largest
+// component z, and the shear that makes the ray +z.
+struct Shear {
+    axes: vec3<u32>,
+    s: vec3<f32>,
+}
+
+fn shear_for(d: vec3<f32>) -> Shear {
+    let a = abs(d);
+    var kz = 2u;
+    if (a.x > a.y && a.x > a.z) {
+        kz = 0u;
+    } else if (a.y > a.z) {
+        kz = 1u;
+    }
+    var kx = (kz + 1u) % 3u;
+    var ky = (kx + 1u) % 3u;
+    // Keep the winding: swap the other two axes when the ray points down its main axis.
+    if (d[kz] < 0.0) {
+        let k = kx;
+        kx = ky;
+        ky = k;
+    }
+    return Shear(vec3<u32>(kx, ky, kz), vec3<f32>(d[kx] / d[kz], d[ky] / d[kz], 1.0 / d[kz]));
+}
+
+fn permute(v: vec3<f32>, k: vec3<u32>) -> vec3<f32> {
+    return vec3<f32>(v[k.x], v[k.y], v[k.z]);
+}
+
+// Woop, Benthin, Wald, "Watertight Ray/Triangle Intersection", JCGT 2(1), 2013. Edge
+// functions are computed in a frame where the ray is the +z axis, so an edge shared by two
+// triangles gives both the same value with opposite signs: no ray slips between them.
+// The paper recomputes an edge function that is exactly 0 in double precision; here 0
+// counts as inside, so a ray on a shared edge is taken by both triangles, never by neither.
+fn triangle_t_watertight(tri: Triangle, ray: Ray, shear: Shear, tmin: f32) -> f32 {
+    let a = permute(tri.v0 - ray.origin, shear.axes);
+    let b = permute(tri.v1 - ray.origin, shear.axes);
+    let c = permute(tri.v2 - ray.origin, shear.axes);
+    let ax = a.x - shear.s.x * a.z;
+    let ay = a.y - shear.s.y * a.z;
+    let bx = b.x - shear.s.x * b.z;
+    let by = b.y - shear.s.y * b.z;
+    let cx = c.x - shear.s.x * c.z;
+    let cy = c.y - shear.s.y * c.z;
+    let u = cx * by - cy * bx;
+    let v = ax * cy - ay * cx;
+    let w = bx * ay - by * ax;
+    if ((u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0)) {
+        return NO_HIT;
+    }
+    let det = u + v + w;
+    if (det == 0.0) {
+        return NO_HIT;
+    }
+    return t_if_above((u * a.z + v * b.z + w * c.z) * shear.s.z / det, tmin);
+}
+
+fn triangle_normal(tri: Triangle) -> vec3<f32> {
+    return normalize(cross(tri.v1 - tri.v0, tri.v2 - tri.v0));
+}
