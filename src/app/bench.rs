@@ -42,7 +42,7 @@ pub struct Row {
     pub width: u32,
     pub height: u32,
     /// Time to build the hierarchy, when the scene got one.
-    pub bvh_build_ms: Option<f64>,
+    pub acceleration_build_ms: Option<f64>,
     /// Bytes of scene data on the GPU (primitives, hierarchy, materials, lights).
     pub scene_bytes: u64,
     /// Median kernel time; from GPU timestamps when `timestamps`, else the render's wall time.
@@ -117,7 +117,7 @@ pub fn run_case(gpu: &GpuRenderer, case: &Case, runs: usize) -> Result<Row, GpuE
     let mut kernel = Vec::new();
     let mut wall = Vec::new();
     let mut timestamps = false;
-    let mut bvh_build_ms = None;
+    let mut acceleration_build_ms = None;
     let mut used = case.acceleration;
     let mut scene_bytes = 0;
     let mut gpu_samples = Vec::new();
@@ -132,7 +132,7 @@ pub fn run_case(gpu: &GpuRenderer, case: &Case, runs: usize) -> Result<Row, GpuE
         let elapsed = start.elapsed().as_secs_f64() * 1e3;
         wall.push(elapsed);
         timestamps = stats.kernel_ns.is_some();
-        bvh_build_ms = bvh_build_ms.or(stats.acceleration_build_ms);
+        acceleration_build_ms = acceleration_build_ms.or(stats.acceleration_build_ms);
         used = stats.acceleration;
         scene_bytes = stats.scene_bytes;
         kernel.push(stats.kernel_ns.map_or(elapsed, |ns| ns as f64 / 1e6));
@@ -149,7 +149,7 @@ pub fn run_case(gpu: &GpuRenderer, case: &Case, runs: usize) -> Result<Row, GpuE
         triangles: counts.triangles,
         width: case.width,
         height: case.height,
-        bvh_build_ms,
+        acceleration_build_ms,
         scene_bytes,
         kernel_ms: median(&mut kernel),
         timestamps,
@@ -342,7 +342,7 @@ pub fn markdown(rows: &[Row], adapter: &str) -> String {
             r.acceleration.name(),
             r.primitives,
             if r.width == r.height { r.width.to_string() } else { format!("{}×{}", r.width, r.height) },
-            r.bvh_build_ms.map_or("-".to_string(), |ms| format!("{ms:.1}")),
+            r.acceleration_build_ms.map_or("-".to_string(), |ms| format!("{ms:.1}")),
             r.kernel_ms,
             r.wall_ms,
             r.mrays_per_s(),
@@ -360,7 +360,7 @@ pub fn markdown(rows: &[Row], adapter: &str) -> String {
 
 /// The rows as CSV, one line each.
 pub fn csv(rows: &[Row]) -> String {
-    let mut out = String::from("scene,triangle_test,acceleration,primitives,triangles,width,height,bvh_build_ms,scene_bytes,kernel_ms,kernel_from_timestamps,wall_ms,mrays_per_s,peak_mib,samples,off_by_more_than_one_fraction,hit_mismatches,depth_rel_max,normal_angle_max_rad,color_float_max\n");
+    let mut out = String::from("scene,triangle_test,acceleration,primitives,triangles,width,height,acceleration_build_ms,scene_bytes,kernel_ms,kernel_from_timestamps,wall_ms,mrays_per_s,peak_mib,samples,off_by_more_than_one_fraction,hit_mismatches,depth_rel_max,normal_angle_max_rad,color_float_max\n");
     for r in rows {
         let _ = writeln!(
             out,
@@ -372,7 +372,7 @@ pub fn csv(rows: &[Row]) -> String {
             r.triangles,
             r.width,
             r.height,
-            r.bvh_build_ms.map_or(String::new(), |ms| format!("{ms:.3}")),
+            r.acceleration_build_ms.map_or(String::new(), |ms| format!("{ms:.3}")),
             r.scene_bytes,
             r.kernel_ms,
             r.timestamps,

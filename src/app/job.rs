@@ -71,8 +71,8 @@ impl Report {
             ));
             // The parts of the GPU's rendering time that it measures on its own.
             time += &format!(" (preparing {:.1} ms: buffers, pipeline, upload", stats.prepare_ms);
-            if let Some(bvh) = stats.acceleration_build_ms {
-                time += &format!("; hierarchy {bvh:.1} ms of it");
+            if let Some(build) = stats.acceleration_build_ms {
+                time += &format!("; building the {} {build:.1} ms of it", stats.acceleration.name());
             }
             if let Some(ns) = stats.kernel_ns {
                 time += &format!("; kernel {:.1} ms", ns as f64 / 1e6);
