@@ -3,6 +3,7 @@
 #![allow(dead_code)]
 
 pub mod hard;
+pub mod occlusion;
 
 use raycaster::gpu::GpuRenderer;
 use std::io::Write as _;
