@@ -1,8 +1,8 @@
 //! Primary rays (docs/SPEC.md §3): where pixel (i, j) looks from and in which direction.
 //!
-//! The CPU reference calls [`PrimaryRays::ray`] per pixel in f64; the GPU backend uploads
-//! the same `direction`, `horizontal` and `up` (in f32, with the scene moved so that
-//! `center` is the origin) and the kernel repeats the arithmetic.
+//! The CPU reference calls [`PrimaryRays::ray`] per pixel in f64 (its `primary_ray` stage);
+//! the GPU backend uploads the same `direction`, `horizontal` and `up` (in f32, with the
+//! scene moved so that `center` is the origin) and the kernel repeats the arithmetic.
 
 use crate::scene::{Camera, Projection};
 use glam::DVec3;
@@ -25,14 +25,33 @@ pub struct PrimaryRays {
     pub height: u32,
 }
 
-/// A ray `origin + t·direction`. `direction` need not be unit length: primary rays have
-/// unit directions (in world space, so that `t` is a distance), but the reference carries a
-/// ray into a Transform's object space as `(M⁻¹·o, M⁻¹·d)` without renormalising, so that
-/// `t` stays the world `t` (docs/SPEC.md §4).
+/// A ray `origin + t·direction` and the open interval `t_min < t < t_max` in which a hit
+/// counts (pbrt's `Ray` with its `tMax`): the interval belongs to the ray, not to the
+/// camera, because the rays still to come (towards a light, reflected, refracted) each
+/// need their own — a shadow ray stops at its light, a primary ray at the first hit.
+///
+/// `direction` need not be unit length: primary rays have unit directions (in world space,
+/// so that `t` is a distance), but the reference carries a ray into a Transform's object
+/// space as `(M⁻¹·o, M⁻¹·d)` without renormalising, so that `t`, and with it the interval,
+/// stays the world `t` (docs/SPEC.md §4).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Ray {
     pub origin: DVec3,
     pub direction: DVec3,
+    pub t_min: f64,
+    pub t_max: f64,
+}
+
+impl Ray {
+    /// A ray that counts every hit with `t > t_min`.
+    pub fn new(origin: DVec3, direction: DVec3, t_min: f64) -> Ray {
+        Ray { origin, direction, t_min, t_max: f64::INFINITY }
+    }
+
+    /// The point at parameter `t`, `origin + t·direction`.
+    pub fn at(&self, t: f64) -> DVec3 {
+        self.origin + t * self.direction
+    }
 }
 
 impl PrimaryRays {
@@ -66,24 +85,17 @@ impl PrimaryRays {
         (x, y)
     }
 
-    /// The ray through pixel (i from the left, j from the bottom).
+    /// The ray through pixel (i from the left, j from the bottom), with the camera's
+    /// interval (docs/SPEC.md §3): an orthographic ray comes from infinitely far behind the
+    /// image plane (`t_min = −∞`, so objects behind the plane are seen, at negative t); a
+    /// perspective ray starts at the eye (`t_min = 0`). Neither has a far limit.
     pub fn ray(&self, i: u32, j: u32) -> Ray {
         let (x, y) = self.screen(i, j);
         let offset = x * self.horizontal + y * self.up;
         if self.orthographic {
-            Ray { origin: self.center + offset, direction: self.direction }
+            Ray::new(self.center + offset, self.direction, f64::NEG_INFINITY)
         } else {
-            Ray { origin: self.center, direction: (self.direction + offset).normalize() }
-        }
-    }
-
-    /// Rays from an orthographic camera start at infinity (objects behind the image plane
-    /// are seen, at negative t); perspective rays start at the eye.
-    pub fn t_min(&self) -> f64 {
-        if self.orthographic {
-            f64::NEG_INFINITY
-        } else {
-            0.0
+            Ray::new(self.center, (self.direction + offset).normalize(), 0.0)
         }
     }
 }

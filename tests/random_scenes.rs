@@ -27,7 +27,7 @@ use proptest::test_runner::{Config, FileFailurePersistence, RngAlgorithm, TestEr
 use raycaster::gpu::GpuRenderer;
 use raycaster::metrics::{compare_frames, depth_range_of};
 use raycaster::render::RenderOptions;
-use raycaster::scene::{generate, load_scene};
+use raycaster::scene::{generate, load_scene, Scene};
 use std::cell::RefCell;
 use std::fmt::Write as _;
 use std::time::Instant;
@@ -463,15 +463,8 @@ struct Totals {
 /// needed to reproduce a failure with the binary.
 fn check(gpu: &GpuRenderer, spec: &SceneSpec, totals: &RefCell<Totals>) -> Result<(), TestCaseError> {
     let files = spec.files();
-    let dir = tempfile::tempdir().map_err(|e| TestCaseError::fail(e.to_string()))?;
-    let write = |name: &str, text: &str| std::fs::write(dir.path().join(name), text).expect("writing a scene file");
-    write("scene.txt", &files.scene);
-    for (name, text) in &files.objs {
-        write(name, text);
-    }
     let reproduce = || reproduction(spec, &files);
-    let scene = load_scene(&dir.path().join("scene.txt"))
-        .map_err(|e| TestCaseError::fail(format!("a generated scene does not load: {e}\n{}", reproduce())))?;
+    let (_dir, scene) = load(spec, &files)?;
 
     let options = RenderOptions { shade_back: spec.shade_back, ..RenderOptions::all(spec.width, spec.height) };
     let start = Instant::now();
@@ -513,6 +506,21 @@ fn check(gpu: &GpuRenderer, spec: &SceneSpec, totals: &RefCell<Totals>) -> Resul
     Ok(())
 }
 
+/// Writes the scene's files into a temporary folder (returned: the files live as long as
+/// it) and loads the scene from there.
+fn load(spec: &SceneSpec, files: &Files) -> Result<(tempfile::TempDir, Scene), TestCaseError> {
+    let dir = tempfile::tempdir().map_err(|e| TestCaseError::fail(e.to_string()))?;
+    let write = |name: &str, text: &str| std::fs::write(dir.path().join(name), text).expect("writing a scene file");
+    write("scene.txt", &files.scene);
+    for (name, text) in &files.objs {
+        write(name, text);
+    }
+    let scene = load_scene(&dir.path().join("scene.txt")).map_err(|e| {
+        TestCaseError::fail(format!("a generated scene does not load: {e}\n{}", reproduction(spec, files)))
+    })?;
+    Ok((dir, scene))
+}
+
 fn reproduction(spec: &SceneSpec, files: &Files) -> String {
     let mut text = format!(
         "---- scene.txt ----\n{}---- end ----\nraycaster compare -input scene.txt -size {} {} -output o.tga -normals n.tga{}\n",
@@ -537,15 +545,8 @@ fn seed() -> u64 {
     }
 }
 
-#[test]
-fn gpu_matches_reference_on_random_scenes() {
-    if common::gpu().is_none() {
-        return;
-    }
-    // Each case with one way of finding candidates in turn, so that the bins and the
-    // hierarchy meet random scenes whatever the cost model picks at these small sizes.
-    let renderers: Vec<_> = common::ACCELERATIONS.iter().map(|&a| common::gpu_with(a).unwrap()).collect();
-    let seed = seed();
+/// The cases of `seed`: `RANDOM_SCENES_CASES` of them, else [`CASES`].
+fn runner(seed: u64) -> TestRunner {
     let mut bytes = [0u8; 32];
     bytes[..8].copy_from_slice(&seed.to_le_bytes());
     let cases = match std::env::var("RANDOM_SCENES_CASES") {
@@ -558,7 +559,28 @@ fn gpu_matches_reference_on_random_scenes() {
         failure_persistence: Some(Box::new(FileFailurePersistence::WithSource("proptest-regressions"))),
         ..Config::default()
     };
-    let mut runner = TestRunner::new_with_rng(config, TestRng::from_seed(RngAlgorithm::ChaCha, &bytes));
+    TestRunner::new_with_rng(config, TestRng::from_seed(RngAlgorithm::ChaCha, &bytes))
+}
+
+/// Fails with the minimal failing scene, if the run found one.
+fn passed(seed: u64, result: Result<(), TestError<SceneSpec>>) {
+    match result {
+        Ok(()) => {}
+        Err(TestError::Fail(reason, _)) => panic!("seed {seed}: minimal failing scene:\n{reason}"),
+        Err(TestError::Abort(reason)) => panic!("seed {seed}: aborted: {reason}"),
+    }
+}
+
+#[test]
+fn gpu_matches_reference_on_random_scenes() {
+    if common::gpu().is_none() {
+        return;
+    }
+    // Each case with one way of finding candidates in turn, so that the bins and the
+    // hierarchy meet random scenes whatever the cost model picks at these small sizes.
+    let renderers: Vec<_> = common::ACCELERATIONS.iter().map(|&a| common::gpu_with(a).unwrap()).collect();
+    let seed = seed();
+    let mut runner = runner(seed);
     let totals = RefCell::new(Totals::default());
     let start = Instant::now();
     eprintln!("random scenes: seed {seed} (RANDOM_SCENES_SEED={seed} reruns these cases)");
@@ -579,11 +601,28 @@ fn gpu_matches_reference_on_random_scenes() {
         t.hit_mismatches,
         t.off_by_more_than_one
     );
-    match result {
-        Ok(()) => {}
-        Err(TestError::Fail(reason, _)) => panic!("seed {seed}: minimal failing scene:\n{reason}"),
-        Err(TestError::Abort(reason)) => panic!("seed {seed}: aborted: {reason}"),
-    }
+    passed(seed, result);
+}
+
+/// The reference alone (no GPU needed): its any-hit query agrees with its closest hit on
+/// random scenes, for the primary rays of a 24 × 24 image and the secondary rays from their
+/// hits (`common::occlusion`).
+#[test]
+fn occluded_agrees_with_closest_hit_on_random_scenes() {
+    let seed = seed();
+    eprintln!("occlusion on random scenes: seed {seed} (RANDOM_SCENES_SEED={seed} reruns these cases)");
+    let total = RefCell::new(common::occlusion::Tally::default());
+    let result = runner(seed).run(&scene(), |spec| {
+        let files = spec.files();
+        let (_dir, scene) = load(&spec, &files)?;
+        let tally = common::occlusion::check_scene(&scene, 24, 24)
+            .map_err(|e| TestCaseError::fail(format!("{e}\n{}", reproduction(&spec, &files))))?;
+        total.borrow_mut().add(tally);
+        Ok(())
+    });
+    passed(seed, result);
+    let total = total.into_inner();
+    assert!(total.occluded > 0 && total.clear > 0, "one answer never came up: {total:?}");
 }
 
 #[test]

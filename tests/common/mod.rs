@@ -4,6 +4,7 @@
 
 pub mod bin;
 pub mod hard;
+pub mod occlusion;
 
 use raycaster::gpu::GpuRenderer;
 use std::io::Write as _;

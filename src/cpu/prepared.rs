@@ -1,0 +1,272 @@
+//! The scene as the reference traces it: the parsed tree with what does not depend on the
+//! ray worked out once — each Transform's `M⁻¹` and `(M⁻¹)ᵀ`, each plane's unit normal,
+//! each mesh's bounding box — and the three queries the renderer is built from:
+//!
+//! - [`ReferenceScene::closest_hit`]: the nearest `t` and which primitive it belongs to;
+//! - [`ReferenceScene::surface_at`]: what the shading needs at that hit, built once for the
+//!   nearest hit only (pbrt-v4's split of `Intersect` and `SurfaceInteraction`: the normals
+//!   of the hits a nearer one replaces are never computed);
+//! - [`ReferenceScene::occluded`]: whether anything lies on a ray at all (pbrt-v4's
+//!   `IntersectP`), for shadow rays, which may stop at the first hit they find.
+//!
+//! The tree is still walked for every ray and the ray carried through each Transform in
+//! turn, exactly as docs/SPEC.md §4 says. Composing the matrices of nested Transforms into
+//! one would be faster, but would round differently from the spec's arithmetic, and this
+//! renderer is the spec's arithmetic.
+
+use super::intersect::{
+    intersect_plane, intersect_sphere, intersect_triangle, ray_meets_box, sphere_normal, triangle_normal,
+};
+use crate::camera::Ray;
+use crate::scene::{Bounds, Material, Mesh, Object, Scene, Shape};
+use glam::{DMat4, DVec3};
+
+/// A scene prepared for the reference (see the module documentation).
+pub struct ReferenceScene<'a> {
+    /// The parsed scene it was prepared from (its lights, background and materials are
+    /// used as they are).
+    pub scene: &'a Scene,
+    /// The top-level `Group`'s objects, as in [`Scene::root`].
+    root: Vec<Node>,
+    transforms: Vec<Transform>,
+    primitives: Vec<Primitive<'a>>,
+}
+
+/// A node of [`Scene::root`]'s tree, its leaves and Transforms moved into the scene's lists.
+enum Node {
+    Group(Vec<Node>),
+    Transform { transform: usize, child: Box<Node> },
+    Primitive(usize),
+}
+
+/// One Transform node of the tree.
+struct Transform {
+    /// `M⁻¹`, which carries a ray from the parent's space into the child's.
+    inverse: DMat4,
+    /// `(M⁻¹)ᵀ`, which carries a normal back from the child's space (the normal transforms
+    /// by the inverse transpose so that it stays perpendicular to transformed tangents:
+    /// pbrt-v4 §3.10.3).
+    inverse_transpose: DMat4,
+    /// The nearest Transform enclosing this one: with [`Primitive::transform`], the path
+    /// from a primitive out to the world, which [`ReferenceScene::surface_at`] retraces.
+    parent: Option<usize>,
+}
+
+/// One leaf of the tree (a mesh is one leaf; a hit says which of its triangles).
+struct Primitive<'a> {
+    geometry: Geometry<'a>,
+    material: u32,
+    /// The nearest enclosing Transform, `None` at the top level.
+    transform: Option<usize>,
+}
+
+enum Geometry<'a> {
+    Sphere { center: DVec3, radius: f64 },
+    Plane { unit_normal: DVec3, offset: f64 },
+    Triangle([DVec3; 3]),
+    Mesh { mesh: &'a Mesh, bounds: Bounds },
+}
+
+/// The nearest hit of a ray: only where (`t`) and what; [`ReferenceScene::surface_at`]
+/// makes the rest of it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hit {
+    /// The world t (a ray carried into a Transform keeps the scale of its direction).
+    pub t: f64,
+    primitive: usize,
+    /// Which triangle of a mesh; 0 for the other primitives.
+    triangle: usize,
+}
+
+/// The surface at a hit: what shading, and the secondary rays to come, need.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Surface {
+    /// The hit's world t.
+    pub t: f64,
+    /// The hit point in world space, `o + t·d` of the world ray.
+    pub point: DVec3,
+    /// The unit world normal as the primitive defines it (outward for spheres, `n̂` for
+    /// planes, counter-clockwise for triangles), not flipped toward the viewer.
+    pub normal: DVec3,
+    /// The hit point in the primitive's own coordinates (inside every enclosing
+    /// Transform), where a solid texture is evaluated so that it moves with its object.
+    pub object_point: DVec3,
+    /// Index into [`Scene::materials`].
+    pub material: u32,
+}
+
+/// Whether a query wants the nearest hit or is satisfied by any.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Want {
+    Nearest,
+    Any,
+}
+
+impl<'a> ReferenceScene<'a> {
+    pub fn new(scene: &'a Scene) -> ReferenceScene<'a> {
+        let mut prepared = ReferenceScene { scene, root: Vec::new(), transforms: Vec::new(), primitives: Vec::new() };
+        prepared.root = scene.root.iter().map(|object| prepared.prepare(object, None)).collect();
+        prepared
+    }
+
+    fn prepare(&mut self, object: &'a Object, transform: Option<usize>) -> Node {
+        let (geometry, material) = match &object.shape {
+            Shape::Group(children) => {
+                return Node::Group(children.iter().map(|child| self.prepare(child, transform)).collect())
+            }
+            Shape::Transform { matrix, child } => {
+                let inverse = matrix.inverse();
+                self.transforms.push(Transform { inverse, inverse_transpose: inverse.transpose(), parent: transform });
+                let index = self.transforms.len() - 1;
+                return Node::Transform { transform: index, child: Box::new(self.prepare(child, Some(index))) };
+            }
+            &Shape::Sphere { center, radius, material } => (Geometry::Sphere { center, radius }, material),
+            &Shape::Plane { normal, offset, material } => {
+                (Geometry::Plane { unit_normal: normal.normalize(), offset }, material)
+            }
+            &Shape::Triangle { vertices, material } => (Geometry::Triangle(vertices), material),
+            Shape::Mesh { mesh, material } => (Geometry::Mesh { mesh, bounds: mesh.bounds() }, *material),
+        };
+        self.primitives.push(Primitive { geometry, material, transform });
+        Node::Primitive(self.primitives.len() - 1)
+    }
+
+    /// The material a [`Surface`] names.
+    pub fn material(&self, index: u32) -> &Material {
+        &self.scene.materials[index as usize]
+    }
+
+    /// The hit with the smallest t in the ray's interval, if any (docs/SPEC.md §4: "the
+    /// nearest hit with t > tmin is the one shown").
+    pub fn closest_hit(&self, ray: &Ray) -> Option<Hit> {
+        let mut closest = None;
+        for node in &self.root {
+            self.closest_in(node, ray, &mut closest);
+        }
+        closest
+    }
+
+    /// Replaces `closest` with any hit under `node` nearer than it.
+    fn closest_in(&self, node: &Node, ray: &Ray, closest: &mut Option<Hit>) {
+        match node {
+            Node::Group(children) => {
+                for child in children {
+                    self.closest_in(child, ray, closest);
+                }
+            }
+            Node::Transform { transform, child } => {
+                self.closest_in(child, &self.transforms[*transform].ray_in_child(ray), closest)
+            }
+            &Node::Primitive(primitive) => {
+                // Only a hit nearer than the nearest so far can replace it.
+                let ray = Ray { t_max: closest.map_or(ray.t_max, |hit| hit.t), ..*ray };
+                if let Some((t, triangle)) = self.primitives[primitive].intersect(&ray, Want::Nearest) {
+                    *closest = Some(Hit { t, primitive, triangle });
+                }
+            }
+        }
+    }
+
+    /// Whether any primitive is hit within the ray's interval. Stops at the first hit found,
+    /// which need not be the nearest; true exactly when [`Self::closest_hit`] finds a hit.
+    pub fn occluded(&self, ray: &Ray) -> bool {
+        self.root.iter().any(|node| self.occluded_in(node, ray))
+    }
+
+    fn occluded_in(&self, node: &Node, ray: &Ray) -> bool {
+        match node {
+            Node::Group(children) => children.iter().any(|child| self.occluded_in(child, ray)),
+            Node::Transform { transform, child } => {
+                self.occluded_in(child, &self.transforms[*transform].ray_in_child(ray))
+            }
+            &Node::Primitive(primitive) => self.primitives[primitive].intersect(ray, Want::Any).is_some(),
+        }
+    }
+
+    /// The surface at `hit`, which [`Self::closest_hit`] found on `ray`.
+    ///
+    /// docs/SPEC.md §4: the ray is carried into the primitive's space again, through the
+    /// same Transforms with the same arithmetic as during the search, so the object-space
+    /// point is the one the primitive's test saw; the primitive's normal there is carried
+    /// back out as `normalise((M⁻¹)ᵀ·n)`, innermost Transform first, normalised at each one.
+    pub fn surface_at(&self, hit: &Hit, ray: &Ray) -> Surface {
+        let primitive = &self.primitives[hit.primitive];
+        let object_point = self.ray_in_object_space(primitive.transform, ray).at(hit.t);
+        let mut normal = primitive.normal(hit.triangle, object_point);
+        let mut enclosing = primitive.transform;
+        while let Some(k) = enclosing {
+            let transform = &self.transforms[k];
+            normal = transform.inverse_transpose.transform_vector3(normal).normalize();
+            enclosing = transform.parent;
+        }
+        Surface { t: hit.t, point: ray.at(hit.t), normal, object_point, material: primitive.material }
+    }
+
+    /// `ray` carried through the Transforms from the outermost one in to `transform`.
+    fn ray_in_object_space(&self, transform: Option<usize>, ray: &Ray) -> Ray {
+        match transform {
+            None => *ray,
+            Some(k) => {
+                let parent = self.ray_in_object_space(self.transforms[k].parent, ray);
+                self.transforms[k].ray_in_child(&parent)
+            }
+        }
+    }
+}
+
+impl Transform {
+    /// docs/SPEC.md §4: `(M⁻¹·o, M⁻¹·d)`, the direction not renormalised, so that the
+    /// child's t is the world t and the interval carries over as it is.
+    fn ray_in_child(&self, ray: &Ray) -> Ray {
+        Ray {
+            origin: self.inverse.transform_point3(ray.origin),
+            direction: self.inverse.transform_vector3(ray.direction),
+            ..*ray
+        }
+    }
+}
+
+impl Primitive<'_> {
+    /// A hit in the ray's interval, in the primitive's coordinates: its t and, for a mesh,
+    /// which triangle. With [`Want::Nearest`] the nearest such hit.
+    fn intersect(&self, ray: &Ray, want: Want) -> Option<(f64, usize)> {
+        match &self.geometry {
+            &Geometry::Sphere { center, radius } => intersect_sphere(center, radius, ray).map(|t| (t, 0)),
+            &Geometry::Plane { unit_normal, offset } => intersect_plane(unit_normal, offset, ray).map(|t| (t, 0)),
+            Geometry::Triangle(vertices) => intersect_triangle(vertices, ray).map(|t| (t, 0)),
+            Geometry::Mesh { mesh, bounds } => intersect_mesh(mesh, bounds, ray, want),
+        }
+    }
+
+    /// The unit normal at `point` (for a mesh, on triangle `triangle`), in the primitive's
+    /// coordinates (docs/SPEC.md §4).
+    fn normal(&self, triangle: usize, point: DVec3) -> DVec3 {
+        let vertices = match &self.geometry {
+            &Geometry::Sphere { center, radius } => return sphere_normal(center, radius, point),
+            &Geometry::Plane { unit_normal, .. } => return unit_normal,
+            Geometry::Triangle(vertices) => *vertices,
+            Geometry::Mesh { mesh, .. } => mesh.triangle(triangle),
+        };
+        triangle_normal(&vertices).expect("intersect_triangle hits only triangles with a normal")
+    }
+}
+
+/// The mesh's triangles one after the other, skipped all at once when the ray misses the
+/// mesh's box.
+fn intersect_mesh(mesh: &Mesh, bounds: &Bounds, ray: &Ray, want: Want) -> Option<(f64, usize)> {
+    if !ray_meets_box(ray, bounds) {
+        return None;
+    }
+    let mut ray = *ray;
+    let mut nearest = None;
+    for k in 0..mesh.triangles.len() {
+        if let Some(t) = intersect_triangle(&mesh.triangle(k), &ray) {
+            nearest = Some((t, k));
+            if want == Want::Any {
+                break;
+            }
+            ray.t_max = t;
+        }
+    }
+    nearest
+}
