@@ -631,8 +631,14 @@ fn verbose_on_the_gpu_names_adapter_and_kernel() {
     assert!(result.status.success(), "{message}");
     assert!(message.contains(&format!("backend: gpu, {}", gpu.adapter_info().name)), "{message}");
     assert!(message.contains("kernel: moller triangle test, robust sphere test"), "{message}");
-    let needles =
-        ["time: parsing ", " (preparing ", "; hierarchy ", ", writing ", "memory: peak resident ", "on the GPU"];
+    let needles = [
+        "time: parsing ",
+        " (preparing ",
+        "; building the hierarchy ",
+        ", writing ",
+        "memory: peak resident ",
+        "on the GPU",
+    ];
     for needle in needles {
         assert!(message.contains(needle), "{needle}: {message}");
     }
