@@ -68,13 +68,27 @@ impl CameraBasis {
     /// is zero, or either cannot be normalised in f64 (such as `1e-200 0 0`).
     pub fn new(direction: DVec3, up: DVec3) -> Option<CameraBasis> {
         let unit_direction = direction.try_normalize()?;
-        let unit_up = (up - up.dot(unit_direction) * unit_direction).try_normalize()?;
+        let unit_up = orthogonal_part(up, unit_direction).try_normalize()?;
         // A tiny residue of up after Gram–Schmidt means up ∥ direction.
         if up.length() == 0.0 || up.cross(unit_direction).length() <= 1e-12 * up.length() {
             return None;
         }
         Some(CameraBasis { direction: unit_direction, up: unit_up, horizontal: unit_direction.cross(unit_up) })
     }
+}
+
+/// The part of `v` orthogonal to the unit vector `d` (Gram–Schmidt). When `v` is nearly
+/// parallel to `d` the subtraction cancels, and one pass leaves a remainder that is far from
+/// orthogonal to `d` relative to its own length; a second pass then restores orthogonality
+/// ("twice is enough"), taken only when the first shrank `v` below 1/√2 of its length (the
+/// criterion of Daniel, Gragg, Kaufman and Stewart, Math. Comp. 30, 1976), so that a frame
+/// whose `up` is already far from `direction` is computed exactly as one pass computes it.
+fn orthogonal_part(v: DVec3, d: DVec3) -> DVec3 {
+    let once = v - v.dot(d) * d;
+    if once.length_squared() >= 0.5 * v.length_squared() {
+        return once;
+    }
+    once - once.dot(d) * d
 }
 
 impl Camera {
@@ -533,6 +547,15 @@ mod tests {
             (DVec3::new(0.0, 0.0, -2.0), DVec3::new(0.0, 3.0, -1.0)),
             "kept as written"
         );
+
+        // Nearly parallel: one Gram–Schmidt pass leaves up 1e-6 off orthogonal here (a
+        // direction 4.3e9 times longer along y than across; found by the parser's property
+        // test); the second pass makes the frame orthonormal to rounding.
+        let steep = CameraBasis::new(DVec3::new(-0.16, 4294967296.0, -0.5), DVec3::Y).unwrap();
+        let [d, u, h] = [steep.direction, steep.up, steep.horizontal];
+        for (x, y) in [(d, u), (u, h), (h, d)] {
+            assert!(x.dot(y).abs() < 1e-15 && (x.length() - 1.0).abs() < 1e-15, "{steep:?}");
+        }
 
         // Any basis that exists is orthonormal and right-handed.
         let tilted = CameraBasis::new(DVec3::new(1.0, -2.0, 0.5), DVec3::new(0.3, 1.0, 4.0)).unwrap();
