@@ -315,18 +315,7 @@ fn every_project_and_course_scene_is_in_range() {
     }
     let mut checked = 0;
     for path in &files {
-        let name = path.file_name().unwrap().to_str().unwrap();
-        // Hard cases read meshes generated on the fly; one must not load.
-        let (_meshes, loaded) = if path.starts_with(common::hard::hard_dir()) {
-            common::hard::load_hard(name)
-        } else {
-            (None, load_scene(path))
-        };
-        let scene = match loaded {
-            Ok(scene) => scene,
-            Err(_) if name == "singular_transform.txt" => continue,
-            Err(e) => panic!("{e}"),
-        };
+        let Some((_meshes, scene)) = common::hard::load_listed(path) else { continue };
         for (w, h) in [(200, 200), (16384, 16384), (1, 1)] {
             precision::check(&scene, &RenderOptions::all(w, h)).unwrap_or_else(|e| panic!("{e}"));
         }

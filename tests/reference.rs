@@ -266,17 +266,7 @@ fn occluded_agrees_with_closest_hit_on_the_scenes() {
     let mut checked = 0;
     for path in &scenes {
         let name = path.file_name().unwrap().to_str().unwrap();
-        let (_dir, loaded) = if path.starts_with(common::hard::hard_dir()) {
-            common::hard::load_hard(name)
-        } else {
-            (None, raycaster::scene::load_scene(path))
-        };
-        let loaded = match loaded {
-            Ok(loaded) => loaded,
-            // The one hard case that must not load.
-            Err(_) if name == "singular_transform.txt" => continue,
-            Err(e) => panic!("{e}"),
-        };
+        let Some((_meshes, loaded)) = common::hard::load_listed(path) else { continue };
         let tally = common::occlusion::check_scene(&loaded, 16, 16).unwrap_or_else(|e| panic!("{name}: {e}"));
         total.add(tally);
         checked += 1;
