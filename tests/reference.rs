@@ -284,3 +284,100 @@ fn occluded_agrees_with_closest_hit_on_the_scenes() {
     assert!(checked >= 30, "only {checked} scenes loaded");
     assert!(total.occluded > 1000 && total.clear > 1000, "one answer too rare to have been tested: {total:?}");
 }
+
+/// A unit sphere's pole (normal +z) seen from above by an orthographic camera (V = +z),
+/// lit from 45° (L = (0, 1, 1)/√2): N·L = 1/√2 and the half vector lies halfway, at 22.5°
+/// from N, so N·H = cos 22.5° and (N·H)⁸ = ((1 + cos 45°)/2)⁴ = ((2 + √2)/4)⁴.
+const SPECULAR_POLE: &str = "
+OrthographicCamera { center 0 0 10 direction 0 0 -1 up 0 1 0 size 4 }
+Lights { numLights 1 DirectionalLight { direction 0 -1 -1 color 1 0.8 1 } }
+Materials { numMaterials 1 PhongMaterial { diffuseColor 0.2 0.2 0.2 specularColor 0.5 0.25 0 exponent 8 } }
+Group { numObjects 1 MaterialIndex 0 Sphere { center 0 0 0 radius 1 } }
+";
+
+/// The Blinn–Torrance term at a hand-computed pixel, without and with the specular fix
+/// (which multiplies the lobe by N·L).
+#[test]
+fn specular_term_at_the_pole() {
+    let s = scene(SPECULAR_POLE);
+    let centre = 50 * 101 + 50;
+    let cos_light = 0.5f64.sqrt();
+    let lobe = ((2.0 + 2f64.sqrt()) / 4.0).powi(4);
+    let light = DVec3::new(1.0, 0.8, 1.0);
+    let (diffuse, specular) = (DVec3::splat(0.2), DVec3::new(0.5, 0.25, 0.0));
+    for fix in [false, true] {
+        let options = RenderOptions { specular_fix: fix, ..RenderOptions::all(101, 101) };
+        let frame = raycaster::cpu::render(&s, &options);
+        let weight = if fix { lobe * cos_light } else { lobe };
+        let expected = cos_light * light * diffuse + weight * light * specular;
+        for k in 0..3 {
+            assert!(
+                close(frame.color[centre][k] as f64, expected[k], 1e-6),
+                "fix {fix}, channel {k}: {:?} vs {expected}",
+                frame.color[centre]
+            );
+        }
+    }
+}
+
+/// A light just behind the surface's tangent plane (N·L < 0) gives no specular term, with
+/// or without the fix, even though the half vector still leans towards N (N·H > 0).
+#[test]
+fn no_specular_from_behind_the_surface() {
+    let s = scene(&SPECULAR_POLE.replace("direction 0 -1 -1", "direction 0 -1 0.2"));
+    for fix in [false, true] {
+        let options = RenderOptions { specular_fix: fix, ..RenderOptions::all(101, 101) };
+        assert_eq!(raycaster::cpu::render(&s, &options).color[50 * 101 + 50], [0.0, 0.0, 0.0], "fix {fix}");
+    }
+}
+
+/// A point light 5 units above a plane z = 0 with attenuation 0 0.2 0.05: straight below
+/// it d = 5, N·L = 1 and the divisor is 0.2·5 + 0.05·25 = 2.25; 1.6 units aside,
+/// d = √(1.6² + 5²), N·L = 5/d and the divisor is 0.2·d + 0.05·d².
+#[test]
+fn point_light_attenuation() {
+    let text = "
+OrthographicCamera { center 0 0 10 direction 0 0 -1 up 0 1 0 size 4 }
+Lights { numLights 1 PointLight { position 0 0 5 color 1 1 1 attenuation 0 0.2 0.05 } }
+Materials { numMaterials 1 Material { diffuseColor 0.9 0.45 0.225 } }
+Group { numObjects 1 MaterialIndex 0 Plane { normal 0 0 1 offset 0 } }
+";
+    let frame = raycaster::cpu::render(&scene(text), &RenderOptions::all(5, 5));
+    let diffuse = DVec3::new(0.9, 0.45, 0.225);
+    // Row 2 of 5 is y = 0; columns 2 and 4 are x = 0 and x = 1.6 (pixels 0.8 wide).
+    let d = (1.6f64 * 1.6 + 25.0).sqrt();
+    for (pixel, expected) in [(2 * 5 + 2, diffuse / 2.25), (2 * 5 + 4, diffuse * (5.0 / d) / (0.2 * d + 0.05 * d * d))]
+    {
+        for k in 0..3 {
+            assert!(
+                close(frame.color[pixel][k] as f64, expected[k], 1e-6),
+                "pixel {pixel}, channel {k}: {:?} vs {expected}",
+                frame.color[pixel]
+            );
+        }
+    }
+    // Without `attenuation` (1 0 0) the light does not fall off: 100 units away, straight
+    // above, the plane gets the full diffuse colour.
+    let far = text.replace("position 0 0 5 color 1 1 1 attenuation 0 0.2 0.05", "position 0 0 100 color 1 1 1");
+    let frame = raycaster::cpu::render(&scene(&far), &RenderOptions::all(5, 5));
+    for k in 0..3 {
+        assert!(close(frame.color[12][k] as f64, diffuse[k], 1e-6), "{:?}", frame.color[12]);
+    }
+}
+
+/// Lights add up in file order, a point light and a directional one together.
+#[test]
+fn point_and_directional_lights_add_up() {
+    let text = "
+OrthographicCamera { center 0 0 10 direction 0 0 -1 up 0 1 0 size 4 }
+Lights { numLights 2
+  DirectionalLight { direction 0 0 -1 color 0.25 0 0 }
+  PointLight { position 0 0 2 color 0 0.5 0 attenuation 0.5 0 0 } }
+Background { ambientLight 0 0 0.125 }
+Materials { numMaterials 1 Material { diffuseColor 1 1 1 } }
+Group { numObjects 1 MaterialIndex 0 Plane { normal 0 0 1 offset 0 } }
+";
+    let frame = raycaster::cpu::render(&scene(text), &RenderOptions::all(5, 5));
+    // Red from the directional light, green 0.5/0.5 from the point light, blue ambient.
+    assert_eq!(frame.color[12], [0.25, 1.0, 0.125]);
+}

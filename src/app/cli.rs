@@ -137,13 +137,17 @@ fn render_or_compare(verb: Verb, given: Given) -> Result<Command, UsageError> {
         height,
         files: given.files,
         shade_back: given.shade_back,
+        specular_fix: given.specular_fix,
+        gui: given.gui,
+        preview: given.gui || given.preview,
         backend: given.backend.unwrap_or_default(),
         triangle_test: given.triangle_test,
         sphere_test: given.sphere_test,
         tile: given.tile,
     };
     if verb == Verb::Render {
-        if named.is_empty() {
+        // `-gui` alone asks for the course's window only: nothing to render, not an error.
+        if named.is_empty() && !given.gui {
             return Err(UsageError("nothing to write: give -output, -normals or -depth".into()));
         }
         return Ok(Command::Render(args));
@@ -216,6 +220,7 @@ impl<'a> Values<'a> {
             Takes::Path(set) => set(given, self.path(text)?),
             Takes::Size(set) => set(given, self.size(text)?),
             Takes::Depth(set) => set(given, self.depth(text)?),
+            Takes::Steps(set) => set(given, self.steps(text)?),
             Takes::Choice { names, set } => set(given, self.choice(text, &names())?),
             Takes::Number { what, min, max, set } => set(given, self.number(text, what, *min, *max)?),
             Takes::Split(set) => set(given, self.split(text)?),
@@ -242,21 +247,36 @@ impl<'a> Values<'a> {
     }
 
     fn size(&mut self, flag: &str) -> Result<(u32, u32), UsageError> {
-        let what = "two sizes: W H";
-        let w = self.take(flag, what)?;
-        let h = self.take(flag, what)?;
-        let side = |v: &OsString| -> Result<u32, UsageError> {
-            let text = v.to_string_lossy();
-            match text.parse::<u32>() {
-                Ok(n) if (1..=MAX_SIDE).contains(&n) => Ok(n),
-                _ => Err(UsageError(format!("{flag}: '{text}' is not a whole number from 1 to {MAX_SIDE}"))),
-            }
-        };
-        let (w, h) = (side(&w)?, side(&h)?);
+        let (w, h) = self.two_whole(flag, "two sizes: W H", 1..=MAX_SIDE, &format!("from 1 to {MAX_SIDE}"))?;
         if w as u64 * h as u64 > MAX_PIXELS {
             return Err(UsageError(format!("{flag} {w} {h}: more than {MAX_PIXELS} pixels")));
         }
         Ok((w, h))
+    }
+
+    fn steps(&mut self, flag: &str) -> Result<(u32, u32), UsageError> {
+        self.two_whole(flag, "two numbers of steps: THETA PHI", 1..=u32::MAX, "of steps, 1 or more")
+    }
+
+    /// Two whole numbers in `range` (`what` names them where they are missing; `range_text`
+    /// says the range where one is not in it).
+    fn two_whole(
+        &mut self,
+        flag: &str,
+        what: &str,
+        range: std::ops::RangeInclusive<u32>,
+        range_text: &str,
+    ) -> Result<(u32, u32), UsageError> {
+        let first = self.take(flag, what)?;
+        let second = self.take(flag, what)?;
+        let whole = |v: &OsString| -> Result<u32, UsageError> {
+            let text = v.to_string_lossy();
+            match text.parse::<u32>() {
+                Ok(n) if range.contains(&n) => Ok(n),
+                _ => Err(UsageError(format!("{flag}: '{text}' is not a whole number {range_text}"))),
+            }
+        };
+        Ok((whole(&first)?, whole(&second)?))
     }
 
     fn depth(&mut self, flag: &str) -> Result<DepthArgs, UsageError> {

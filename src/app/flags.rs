@@ -77,6 +77,11 @@ pub struct Given {
     pub size: Option<(u32, u32)>,
     pub files: OutputPaths,
     pub shade_back: bool,
+    pub specular_fix: bool,
+    /// `-gui`: the course's OpenGL window, which we do not open.
+    pub gui: bool,
+    /// `-tessellation θ φ` or `-gouraud`: how that window draws spheres.
+    pub preview: bool,
     pub backend: Option<BackendChoice>,
     pub triangle_test: TriangleTest,
     pub sphere_test: SphereTest,
@@ -112,6 +117,8 @@ pub enum Takes {
     Size(fn(&mut Given, (u32, u32))),
     /// `MIN MAX FILE`, finite, `MIN < MAX`.
     Depth(fn(&mut Given, DepthArgs)),
+    /// Two whole numbers ≥ 1 (`-tessellation THETA PHI`).
+    Steps(fn(&mut Given, (u32, u32))),
     /// One of `names()`; the setter gets its index.
     Choice {
         names: fn() -> Vec<&'static str>,
@@ -139,7 +146,7 @@ impl Takes {
     /// Whether it takes more than one value. Those cannot be glued on with `=`:
     /// `-size=200 200` would read as if the second value belonged to no flag.
     pub fn several_values(&self) -> bool {
-        matches!(self, Takes::Size(_) | Takes::Depth(_))
+        matches!(self, Takes::Size(_) | Takes::Depth(_) | Takes::Steps(_))
     }
 }
 
@@ -181,7 +188,7 @@ pub static FLAGS: &[Flag] = &[
         .help("image size in pixels"),
     Flag::course("output", "FILE", Takes::Path(|g, path| g.files.color = Some(path)), IMAGE_VERBS)
         .once()
-        .help("diffuse-shaded image (.tga or .png; .exr: linear, unclamped)"),
+        .help("shaded image (.tga or .png; .exr: linear, unclamped)"),
     Flag::course("normals", "FILE", Takes::Path(|g, path| g.files.normals = Some(path)), IMAGE_VERBS)
         .once()
         .help("normal visualisation |N| (.tga or .png; .exr: the signed normal)"),
@@ -194,6 +201,16 @@ pub static FLAGS: &[Flag] = &[
         ),
     Flag::course("shade_back", "", Takes::Switch(|g| g.shade_back = true), RENDER_VERBS)
         .help("shade back-facing hits as if they faced the viewer"),
+    Flag::course("gui", "", Takes::Switch(|g| g.gui = true), RENDER_VERBS)
+        .help("the course's OpenGL preview: accepted, no window is opened"),
+    Flag::course("tessellation", "THETA PHI", Takes::Steps(|g, _| g.preview = true), RENDER_VERBS)
+        .help("sphere facets of the OpenGL preview: accepted, ignored"),
+    Flag::course("gouraud", "", Takes::Switch(|g| g.preview = true), RENDER_VERBS)
+        .help("smooth spheres in the OpenGL preview: accepted, ignored"),
+    Flag::ours("specular_fix", "", Takes::Switch(|g| g.specular_fix = true), RENDER_VERBS).help(
+        "the handout's optional specular fix: the specular term times\n\
+         N·L (the reference only)",
+    ),
     Flag::ours(
         "backend",
         "B",

@@ -17,7 +17,7 @@ pub use prepared::{Hit, ReferenceScene, Surface};
 
 use crate::camera::{PrimaryRays, Ray};
 use crate::render::{Frame, Output, Pixel, RenderOptions};
-use crate::scene::Scene;
+use crate::scene::{Light, Material, Scene};
 use glam::DVec3;
 use rayon::prelude::*;
 
@@ -97,9 +97,9 @@ impl<'a> Reference<'a> {
         self.rays.ray(i, j)
     }
 
-    /// docs/SPEC.md §5: ambient plus Lambert's cosine law per directional light, with the
-    /// material's diffuse colour; a back-facing hit is black unless `shade_back`, which
-    /// shades it with the normal turned towards the viewer.
+    /// docs/SPEC.md §5: ambient times diffuse, plus for each light in file order Lambert's
+    /// cosine law and the Blinn–Torrance specular lobe; a back-facing hit is black unless
+    /// `shade_back`, which shades it with the normal turned towards the viewer.
     fn shade(&self, surface: &Surface, ray: &Ray) -> DVec3 {
         let mut normal = surface.normal;
         if ray.direction.dot(normal) > 0.0 {
@@ -109,14 +109,55 @@ impl<'a> Reference<'a> {
             normal = -normal;
         }
         let scene = self.prepared.scene;
-        let diffuse = self.prepared.material(surface.material).diffuse;
-        let mut color = scene.background.ambient * diffuse;
+        let material = self.prepared.material(surface.material);
+        let mut color = scene.background.ambient * material.diffuse;
         for light in &scene.lights {
-            let to_light = -light.direction.normalize();
-            color += to_light.dot(normal).max(0.0) * light.color * diffuse;
+            let (to_light, light_color) = match light {
+                Light::Directional(light) => (-light.direction.normalize(), light.color),
+                Light::Point(light) => {
+                    let offset = light.position - surface.point;
+                    let d = offset.length();
+                    let [a0, a1, a2] = light.attenuation.to_array();
+                    // The parser makes the coefficients ≥ 0 and not all 0: the divisor is
+                    // positive for d > 0; at the light itself it is kept from reaching 0.
+                    let divisor = (a0 + a1 * d + a2 * d * d).max(f64::MIN_POSITIVE);
+                    (offset / d, light.color / divisor)
+                }
+            };
+            color += local(material, normal, to_light, light_color, -ray.direction, self.options.specular_fix);
         }
         color
     }
+}
+
+/// docs/SPEC.md §5: what a surface with unit normal `normal` reflects towards `to_viewer`
+/// (unit) of the light `light_color` arriving from `to_light` (unit): the diffuse term
+/// `max(N·L, 0)·light·diffuse` plus the Blinn–Torrance term `max(N·H, 0)^exponent·light·specular` with
+/// the half vector `H = normalise(L + V)`. The specular term is cut to zero where N·L ≤ 0
+/// (the light is behind the surface), or with `specular_fix` multiplied by `max(N·L, 0)`,
+/// the handout's optional fix for the sharp edge that cut leaves on wide lobes.
+pub fn local(
+    material: &Material,
+    normal: DVec3,
+    to_light: DVec3,
+    light_color: DVec3,
+    to_viewer: DVec3,
+    specular_fix: bool,
+) -> DVec3 {
+    let cos_light = to_light.dot(normal);
+    // Multiplied in this order since A2: directional, specular-free scenes stay bit for bit.
+    let diffuse = cos_light.max(0.0) * light_color * material.diffuse;
+    if material.specular == DVec3::ZERO || cos_light <= 0.0 {
+        return diffuse;
+    }
+    // L + V is zero only when the viewer looks straight at the light from behind the
+    // surface's tangent plane, which N·L > 0 leaves out but for a grazing view.
+    let Some(half) = (to_light + to_viewer).try_normalize() else { return diffuse };
+    let mut lobe = normal.dot(half).max(0.0).powf(material.exponent);
+    if specular_fix {
+        lobe *= cos_light;
+    }
+    diffuse + lobe * light_color * material.specular
 }
 
 /// docs/SPEC.md §5: what the three images need of a pixel, before quantisation: normal and
