@@ -92,6 +92,12 @@ pub struct RenderOptions {
     /// The handout's optional specular fix (`--specular-fix`): the specular term is
     /// multiplied by N·L rather than cut to zero where N·L < 0 (docs/SPEC.md §5).
     pub specular_fix: bool,
+    /// `-shadows`: a shadow ray to every light that faces the hit (docs/SPEC.md §5).
+    pub shadows: bool,
+    /// `-bounces N`: how deep reflected and refracted rays go (0: local shading only).
+    pub bounces: u32,
+    /// `-weight W`: no secondary ray whose weight falls below W.
+    pub weight: f64,
     /// The GPU kernel's ray/triangle algorithm (the reference always uses its f64 Cramer's rule).
     pub triangle_test: TriangleTest,
     /// The GPU kernel's ray/sphere algorithm (the reference always uses its f64 quadratic).
@@ -153,6 +159,9 @@ impl RenderOptions {
             outputs: Outputs::ALL,
             shade_back: false,
             specular_fix: false,
+            shadows: false,
+            bounces: 0,
+            weight: 0.0,
             triangle_test: TriangleTest::default(),
             sphere_test: SphereTest::default(),
         }

@@ -828,3 +828,40 @@ fn a_batch_of_preview_lines_says_so_once() {
          raycaster: commands.txt:3: note: -gui without -output, -normals or -depth: no window is opened, nothing rendered\n"
     );
 }
+
+/// `-shadows`, `-bounces N` and `-weight W` (GRAMMAR.md A4) are the reference's: the GPU
+/// refuses `-shadows` in a scene with lights, `auto` falls back with one warning, and the
+/// values are checked like every other flag's.
+#[test]
+fn shadows_bounces_and_weight() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = std::fs::canonicalize("scenes/spheres_ortho.txt").unwrap();
+    let run = |extra: &[&str]| {
+        let args = [&["-input", path_str(&scene), "-size", "1500", "1500", "-output", "o.tga"], extra].concat();
+        raycaster_in(dir.path(), &args)
+    };
+    for (bad, message) in [
+        (&["-bounces", "x"][..], "-bounces: 'x' is not a whole number from 0 to 1000"),
+        (&["-bounces", "1001"][..], "-bounces: '1001' is not a whole number from 0 to 1000"),
+        (&["-weight", "-0.5"][..], "-weight: '-0.5' is not a number ≥ 0"),
+        (&["-weight", "nan"][..], "-weight: 'nan' is not a number ≥ 0"),
+    ] {
+        let result = run(bad);
+        assert_eq!(result.status.code(), Some(2), "{bad:?}");
+        assert!(stderr(&result).contains(message), "{bad:?}: {}", stderr(&result));
+    }
+    if common::gpu().is_none() {
+        return;
+    }
+    let refusal = format!("{}: -shadows (shadow rays): the GPU kernel does not shade this yet", scene.display());
+    let gpu = run(&["-shadows", "-bounces", "2", "-weight", "0.01", "--backend", "gpu"]);
+    assert_eq!(gpu.status.code(), Some(1));
+    assert_eq!(stderr(&gpu), format!("raycaster: {refusal}; render it with --backend cpu\n"));
+    let auto = run(&["-shadows", "--backend", "auto"]);
+    assert_eq!(auto.status.code(), Some(0));
+    assert_eq!(stderr(&auto), format!("raycaster: warning: {refusal}; rendering with the f64 CPU reference instead\n"));
+    // Without reflective or transparent materials, -bounces and -weight change nothing the
+    // kernel renders: it honours them.
+    let bounces = run(&["-bounces", "3", "-weight", "0.5", "--backend", "gpu"]);
+    assert!(bounces.status.success() && bounces.stderr.is_empty(), "{}", stderr(&bounces));
+}

@@ -381,3 +381,110 @@ Group { numObjects 1 MaterialIndex 0 Plane { normal 0 0 1 offset 0 } }
     // Red from the directional light, green 0.5/0.5 from the point light, blue ambient.
     assert_eq!(frame.color[12], [0.25, 1.0, 0.125]);
 }
+
+fn with(options: RenderOptions, shadows: bool, bounces: u32, weight: f64) -> RenderOptions {
+    RenderOptions { shadows, bounces, weight, ..options }
+}
+
+/// A unit sphere at z = 2 between a plane z = 0 and the light. Straight below it the plane
+/// is in shadow with `-shadows` (ambient only) and lit without. A point light at z = 1,
+/// below the sphere, is not blocked by it: the shadow ray stops at the light.
+#[test]
+fn shadow_rays_to_directional_and_point_lights() {
+    let text = "
+OrthographicCamera { center 0 0 10 direction 0 0 -1 up 0 1 0 size 8 }
+Lights { numLights 1 DirectionalLight { direction 0 0 -1 color 0.5 0.5 0.5 } }
+Background { ambientLight 0.25 0.25 0.25 }
+Materials { numMaterials 1 Material { diffuseColor 1 1 1 } }
+Group { numObjects 2 MaterialIndex 0 Plane { normal 0 0 1 offset 0 }
+  Transform { Translate 0 0 2 Transform { Scale 1 1 0.25 Sphere { center 0 0 0 radius 1 } } } }
+";
+    // 9×9 pixels of 8/9 units: the centre pixel looks at the sphere; the top row's middle
+    // pixel (index 4), at x = 0, y = 3.56, misses it and meets the plane, lit from above.
+    let options = RenderOptions::all(9, 9);
+    let s = scene(text);
+    let lit = raycaster::cpu::render(&s, &options);
+    let shadowed = raycaster::cpu::render(&s, &with(options, true, 0, 0.0));
+    assert_eq!(lit.color[0 * 9 + 4], [0.75, 0.75, 0.75]);
+    assert_eq!(shadowed.color[0 * 9 + 4], [0.75, 0.75, 0.75], "nothing blocks it");
+    // A light coming in at 45° throws the sphere's shadow 2 units aside, onto x = −2: pixel
+    // column 4 − 2.25 ≈ 2 (x = −1.78) lies in it.
+    let slanted = scene(&text.replace("direction 0 0 -1 color", "direction -1 0 -1 color"));
+    let lit = raycaster::cpu::render(&slanted, &options);
+    let shadowed = raycaster::cpu::render(&slanted, &with(options, true, 0, 0.0));
+    let cos = 0.5f64.sqrt();
+    let full = (0.25 + 0.5 * cos) as f32;
+    assert!((lit.color[4 * 9 + 2][0] - full).abs() < 1e-6, "{:?}", lit.color[4 * 9 + 2]);
+    assert_eq!(shadowed.color[4 * 9 + 2], [0.25, 0.25, 0.25]);
+    // A shadow ray to a point light stops at the light.
+    let point = |sphere: &str| {
+        scene(&format!(
+            "OrthographicCamera {{ center 0 0 10 direction 0 0 -1 up 0 1 0 size 4 }}
+             Lights {{ numLights 1 PointLight {{ position 2 0 1 color 0.5 0.5 0.5 }} }}
+             Background {{ ambientLight 0.25 0.25 0.25 }}
+             Materials {{ numMaterials 1 Material {{ diffuseColor 1 1 1 }} }}
+             Group {{ numObjects 2 MaterialIndex 0 Plane {{ normal 0 0 1 offset 0 }} {sphere} }}"
+        ))
+    };
+    // The centre pixel sees the plane at the origin; the light is at (2, 0, 1), d = √5,
+    // N·L = 1/√5. A sphere on the same line but beyond the light, at (4, 0, 2) (outside the
+    // picture), blocks nothing; one between them, at (1, 0, 0.5), puts the point in shadow.
+    let options = RenderOptions::all(9, 9);
+    let lit = (0.25 + 0.5 / 5f64.sqrt()) as f32;
+    let beyond = raycaster::cpu::render(&point("Sphere { center 4 0 2 radius 0.5 }"), &with(options, true, 0, 0.0));
+    assert!((beyond.color[40][0] - lit).abs() < 1e-6, "{:?}", beyond.color[40]);
+    let between = raycaster::cpu::render(&point("Sphere { center 1 0 0.5 radius 0.2 }"), &with(options, true, 0, 0.0));
+    assert_eq!(between.color[40], [0.25, 0.25, 0.25]);
+}
+
+/// A mirror plane (reflective 0.5, no diffuse) under an orthographic camera looking
+/// straight down: the reflected ray goes straight up and misses, so the pixel is half the
+/// background colour with one bounce, black with none, and black when `-weight` prunes a
+/// ray of weight |(0.5, 0.5, 0.5)| = 0.866.
+#[test]
+fn reflection_weighted_by_the_reflective_colour() {
+    let s = scene(
+        "OrthographicCamera { center 0 0 10 direction 0 0 -1 up 0 1 0 size 4 }
+         Background { color 0.2 0.4 0.8 }
+         Lights { numLights 1 DirectionalLight { direction 0 0 -1 color 1 1 1 } }
+         Materials { numMaterials 1 PhongMaterial { diffuseColor 0 0 0 reflectiveColor 0.5 0.5 0.5 } }
+         Group { numObjects 1 MaterialIndex 0 Plane { normal 0 0 1 offset 0 } }",
+    );
+    let options = RenderOptions::all(1, 1);
+    assert_eq!(raycaster::cpu::render(&s, &with(options, false, 0, 0.0)).color[0], [0.0, 0.0, 0.0]);
+    assert_eq!(raycaster::cpu::render(&s, &with(options, false, 1, 0.0)).color[0], [0.1, 0.2, 0.4]);
+    assert_eq!(raycaster::cpu::render(&s, &with(options, false, 1, 0.86)).color[0], [0.1, 0.2, 0.4]);
+    assert_eq!(raycaster::cpu::render(&s, &with(options, false, 1, 0.87)).color[0], [0.0, 0.0, 0.0]);
+}
+
+/// Snell's law by hand: from index 1 into 1.5 at 45°, sin θt = sin 45° / 1.5; from 1.5 into
+/// 1 at 60°, sin θt would be 1.5 · sin 60° = 1.3 > 1: total internal reflection, no ray.
+#[test]
+fn refraction_follows_snell_and_total_internal_reflection_spawns_nothing() {
+    use raycaster::cpu::refract;
+    let d = DVec3::new(1.0, 0.0, -1.0).normalize();
+    let t = refract(d, DVec3::Z, 1.0, 1.5).expect("no TIR entering a denser medium");
+    let sin_t = 0.5f64.sqrt() / 1.5;
+    assert!((t - DVec3::new(sin_t, 0.0, -(1.0 - sin_t * sin_t).sqrt())).length() < 1e-12, "{t}");
+    let steep = DVec3::new(60f64.to_radians().sin(), 0.0, -60f64.to_radians().cos());
+    assert_eq!(refract(steep, DVec3::Z, 1.5, 1.0), None);
+}
+
+/// A fully transparent sphere (transparentColor 1 1 1, no diffuse) of index 1.5 seen dead
+/// centre: the ray enters and leaves along the normal, unbent, so the pixel shows the
+/// background, after two bounces (in, out), with -shade_back for the hit from inside.
+/// With one bounce the refracted ray's first hit is the sphere's far side from inside,
+/// which shades black (no diffuse, no further bounce).
+#[test]
+fn refraction_through_a_sphere_carries_the_index() {
+    let s = scene(
+        "OrthographicCamera { center 0 0 10 direction 0 0 -1 up 0 1 0 size 4 }
+         Background { color 0.2 0.4 0.8 }
+         Lights { numLights 1 DirectionalLight { direction 0 0 -1 color 1 1 1 } }
+         Materials { numMaterials 1 PhongMaterial { diffuseColor 0 0 0 transparentColor 1 1 1 indexOfRefraction 1.5 } }
+         Group { numObjects 1 MaterialIndex 0 Sphere { center 0 0 0 radius 1 } }",
+    );
+    let options = RenderOptions { shade_back: true, ..RenderOptions::all(1, 1) };
+    assert_eq!(raycaster::cpu::render(&s, &with(options, false, 1, 0.0)).color[0], [0.0, 0.0, 0.0]);
+    assert_eq!(raycaster::cpu::render(&s, &with(options, false, 2, 0.0)).color[0], [0.2, 0.4, 0.8]);
+}

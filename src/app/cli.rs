@@ -138,6 +138,9 @@ fn render_or_compare(verb: Verb, given: Given) -> Result<Command, UsageError> {
         files: given.files,
         shade_back: given.shade_back,
         specular_fix: given.specular_fix,
+        shadows: given.shadows,
+        bounces: given.bounces,
+        weight: given.weight,
         gui: given.gui,
         preview: given.gui || given.preview,
         backend: given.backend.unwrap_or_default(),
@@ -222,6 +225,7 @@ impl<'a> Values<'a> {
             Takes::Depth(set) => set(given, self.depth(text)?),
             Takes::Steps(set) => set(given, self.steps(text)?),
             Takes::Choice { names, set } => set(given, self.choice(text, &names())?),
+            Takes::Real { what, set } => set(given, self.real(text, what)?),
             Takes::Number { what, min, max, set } => set(given, self.number(text, what, *min, *max)?),
             Takes::Split(set) => set(given, self.split(text)?),
             Takes::Outputs(set) => set(given, self.outputs(text)?),
@@ -335,6 +339,15 @@ impl<'a> Values<'a> {
     }
 
     /// A whole number from `min` to `max`, `what` saying what it counts ("a number of runs").
+    fn real(&mut self, flag: &str, what: &str) -> Result<f64, UsageError> {
+        let value = self.take(flag, what)?;
+        let text = value.to_string_lossy();
+        match text.parse::<f64>() {
+            Ok(w) if w.is_finite() && w >= 0.0 => Ok(w),
+            _ => Err(UsageError(format!("{flag}: '{text}' is not a number ≥ 0"))),
+        }
+    }
+
     fn number(&mut self, flag: &str, what: &str, min: u64, max: u64) -> Result<u64, UsageError> {
         let value = self.take(flag, what)?;
         let text = value.to_string_lossy();

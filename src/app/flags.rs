@@ -78,6 +78,9 @@ pub struct Given {
     pub files: OutputPaths,
     pub shade_back: bool,
     pub specular_fix: bool,
+    pub shadows: bool,
+    pub bounces: u32,
+    pub weight: f64,
     /// `-gui`: the course's OpenGL window, which we do not open.
     pub gui: bool,
     /// `-tessellation θ φ` or `-gouraud`: how that window draws spheres.
@@ -123,6 +126,11 @@ pub enum Takes {
     Choice {
         names: fn() -> Vec<&'static str>,
         set: fn(&mut Given, usize),
+    },
+    /// A finite number ≥ 0; `what` names it where it is missing.
+    Real {
+        what: &'static str,
+        set: fn(&mut Given, f64),
     },
     /// A whole number from `min` to `max`; `what` names it where it is missing.
     Number {
@@ -173,6 +181,9 @@ pub struct Flag {
 
 use Verb::{Batch, Bench, Compare, Render, Stitch};
 
+/// The deepest `-bounces` (the reference recurses once per bounce).
+pub const MAX_BOUNCES: u64 = 1000;
+
 const IMAGE_VERBS: Verbs = Verbs::of(&[Render, Compare, Stitch]);
 const RENDER_VERBS: Verbs = Verbs::of(&[Render, Compare]);
 
@@ -201,6 +212,17 @@ pub static FLAGS: &[Flag] = &[
         ),
     Flag::course("shade_back", "", Takes::Switch(|g| g.shade_back = true), RENDER_VERBS)
         .help("shade back-facing hits as if they faced the viewer"),
+    Flag::course("shadows", "", Takes::Switch(|g| g.shadows = true), RENDER_VERBS)
+        .help("cast a shadow ray to every light (the reference only)"),
+    Flag::course(
+        "bounces",
+        "N",
+        Takes::Number { what: "a number of bounces", min: 0, max: MAX_BOUNCES, set: |g, n| g.bounces = n as u32 },
+        RENDER_VERBS,
+    )
+    .help("reflected and refracted rays, at most N deep (default 0: local\nshading only)"),
+    Flag::course("weight", "W", Takes::Real { what: "a ray weight", set: |g, w| g.weight = w }, RENDER_VERBS)
+        .help("no secondary ray whose weight falls below W (default 0)"),
     Flag::course("gui", "", Takes::Switch(|g| g.gui = true), RENDER_VERBS)
         .help("the course's OpenGL preview: accepted, no window is opened"),
     Flag::course("tessellation", "THETA PHI", Takes::Steps(|g, _| g.preview = true), RENDER_VERBS)

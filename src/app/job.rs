@@ -37,6 +37,9 @@ pub fn options_for(args: &RenderArgs) -> RenderOptions {
         outputs: args.files.outputs(),
         shade_back: args.shade_back,
         specular_fix: args.specular_fix,
+        shadows: args.shadows,
+        bounces: args.bounces,
+        weight: args.weight,
         triangle_test: args.triangle_test,
         sphere_test: args.sphere_test,
     }
@@ -191,12 +194,17 @@ pub fn render_scene(
 /// tests, so the kernel's variants count only on the GPU; the GPU and the reference differ
 /// in the last bits, so the backend counts.
 fn flags_text(args: &RenderArgs, backend: &Backend) -> String {
-    let shade_back = match (args.shade_back, args.specular_fix) {
-        (false, false) => "",
-        (true, false) => " -shade_back",
-        (false, true) => " --specular-fix",
-        (true, true) => " -shade_back --specular-fix",
-    };
+    let mut shade_back = String::new();
+    for (given, flag) in
+        [(args.shade_back, " -shade_back"), (args.specular_fix, " --specular-fix"), (args.shadows, " -shadows")]
+    {
+        if given {
+            shade_back += flag;
+        }
+    }
+    if args.bounces > 0 {
+        shade_back += &format!(" -bounces {} -weight {}", args.bounces, args.weight);
+    }
     match backend {
         Backend::Gpu(..) => format!(
             "--backend gpu --triangle-test {} --sphere-test {}{shade_back}",

@@ -5,10 +5,11 @@
 //! The kernel shades docs/SPEC.md §5 with directional lights and the diffuse term only. It
 //! refuses, at the first offending place in the file:
 //!
+//! - `-shadows` in a scene with lights (the kernel casts no shadow rays);
 //! - a `PointLight` (the kernel has no light position or attenuation);
 //! - a material with a non-zero `specularColor` (no specular lobe, so `--specular-fix`
 //!   changes nothing in what it renders), `reflectiveColor` or `transparentColor` (no
-//!   secondary rays).
+//!   secondary rays, so `-bounces` and `-weight` change nothing in what it renders).
 //!
 //! The flags that shape only the course's OpenGL preview (`-gui`, `-tessellation`,
 //! `-gouraud`) change no pixel of the files, so the kernel honours them by ignoring them.
@@ -40,9 +41,12 @@ impl std::error::Error for UnsupportedError {}
 
 /// Whether the kernel shades `scene` at `options` as the reference does; the first
 /// light, then the first material, it does not otherwise.
-pub fn check(scene: &Scene, _options: &RenderOptions) -> Result<(), UnsupportedError> {
+pub fn check(scene: &Scene, options: &RenderOptions) -> Result<(), UnsupportedError> {
     let refuse =
         |location: Option<Location>, what: String| UnsupportedError { file: scene.path.clone(), location, what };
+    if options.shadows && !scene.lights.is_empty() {
+        return Err(refuse(None, "-shadows (shadow rays)".into()));
+    }
     if let Some(Light::Point(light)) = scene.lights.iter().find(|l| matches!(l, Light::Point(_))) {
         return Err(refuse(Some(light.location), "PointLight".into()));
     }
