@@ -413,6 +413,10 @@ impl Flag {
         let head =
             if self.metavar.is_empty() { self.spelled() } else { format!("{} {}", self.spelled(), self.metavar) };
         let help = self.help.replace('\n', &format!("\n{:25}", ""));
+        if head.chars().count() >= 23 {
+            // Too long to share a line with its help (`-tessellation THETA PHI`).
+            return format!("  {head}\n{:25}{help}\n", "");
+        }
         format!("  {head:<23}{help}\n")
     }
 }
@@ -588,6 +592,8 @@ mod tests {
             assert!(text.contains(flag.help.lines().next().unwrap()), "{}", flag.name);
         }
         assert!(text.contains("Usage: raycaster -input SCENE -size W H [-output FILE]"), "{text}");
+        // A flag too long for the column gets its help on the next line, never glued on.
+        assert!(text.contains("  -tessellation THETA PHI\n                         sphere facets"), "{text}");
         assert!(text.contains("raycaster batch FILE [--backend gpu|cpu|auto] [--shard K/N]\n"), "{text}");
         let compare = text.split("raycaster compare").nth(1).unwrap().split("  Renders").next().unwrap();
         assert!(!compare.contains("--backend") && !compare.contains("--tile"), "{compare}");
