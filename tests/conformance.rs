@@ -7,7 +7,6 @@ mod common;
 
 use common::{copy_course_folder, corpus, course_commands};
 use raycaster::metrics::image_diff;
-use std::path::Path;
 use std::process::Command;
 
 /// The largest share of pixels off by more than one level, per image and backend.

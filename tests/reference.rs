@@ -405,8 +405,8 @@ Group { numObjects 2 MaterialIndex 0 Plane { normal 0 0 1 offset 0 }
     let s = scene(text);
     let lit = raycaster::cpu::render(&s, &options);
     let shadowed = raycaster::cpu::render(&s, &with(options, true, 0, 0.0));
-    assert_eq!(lit.color[0 * 9 + 4], [0.75, 0.75, 0.75]);
-    assert_eq!(shadowed.color[0 * 9 + 4], [0.75, 0.75, 0.75], "nothing blocks it");
+    assert_eq!(lit.color[4], [0.75, 0.75, 0.75]);
+    assert_eq!(shadowed.color[4], [0.75, 0.75, 0.75], "nothing blocks it");
     // A light coming in at 45° throws the sphere's shadow 2 units aside, onto x = −2: pixel
     // column 4 − 2.25 ≈ 2 (x = −1.78) lies in it.
     let slanted = scene(&text.replace("direction 0 0 -1 color", "direction -1 0 -1 color"));
