@@ -21,7 +21,7 @@ pub fn quantize(v: f32) -> u8 {
     (255.0 * v.clamp(0.0, 1.0)).floor() as u8
 }
 
-/// The diffuse-shaded image (`-output`). The frame must hold colour.
+/// The shaded image (`-output`). The frame must hold colour.
 pub fn color_image(frame: &Frame) -> RgbImage {
     image_from(frame, |k| frame.color[k].map(quantize))
 }

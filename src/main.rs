@@ -46,6 +46,12 @@ fn run() -> Result<(), Failure> {
 
 fn render(args: &RenderArgs, habits: Habits) -> Result<(), Failure> {
     let progress = habits.verbosity != Verbosity::Quiet;
+    if let Some(preview) = app::job::preview_notice(args).filter(|_| progress) {
+        say(&format!("note: {preview}"));
+    }
+    if args.files.outputs().is_empty() {
+        return Ok(()); // `-gui` alone: the notice said so.
+    }
     let (backend, report) = if args.backend == BackendChoice::Auto {
         // The scene first: a job small enough is rendered by the reference at once, without
         // paying for the GPU's start-up.
@@ -99,7 +105,8 @@ fn batch(file: &std::path::Path, choice: BackendChoice, shard: Option<Split>, ha
             shard,
             habits.verbosity != Verbosity::Quiet,
             |line, report| match report {
-                LineReport::Warning(_) | LineReport::Fallback(_) if habits.verbosity == Verbosity::Quiet => {}
+                LineReport::Warning(_) | LineReport::Fallback(_) | LineReport::Notice(_)
+                    if habits.verbosity == Verbosity::Quiet => {}
                 LineReport::Rendered { .. } if habits.verbosity == Verbosity::Verbose => {
                     timings.push(located(line, &report))
                 }

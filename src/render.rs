@@ -7,7 +7,7 @@
 /// One of the images a render makes (docs/SPEC.md §5).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum Output {
-    /// The diffuse-shaded colour (`-output`).
+    /// The shaded colour (`-output`).
     Color,
     /// The world normal (`-normals`).
     Normals,
@@ -89,6 +89,15 @@ pub struct RenderOptions {
     pub outputs: Outputs,
     /// Shade back-facing hits as if they faced the viewer (`-shade_back`).
     pub shade_back: bool,
+    /// The handout's optional specular fix (`--specular-fix`): the specular term is
+    /// multiplied by N·L rather than cut to zero where N·L < 0 (docs/SPEC.md §5).
+    pub specular_fix: bool,
+    /// `-shadows`: a shadow ray to every light that faces the hit (docs/SPEC.md §5).
+    pub shadows: bool,
+    /// `-bounces N`: how deep reflected and refracted rays go (0: local shading only).
+    pub bounces: u32,
+    /// `-weight W`: no secondary ray whose weight falls below W.
+    pub weight: f64,
     /// The GPU kernel's ray/triangle algorithm (the reference always uses its f64 Cramer's rule).
     pub triangle_test: TriangleTest,
     /// The GPU kernel's ray/sphere algorithm (the reference always uses its f64 quadratic).
@@ -149,6 +158,10 @@ impl RenderOptions {
             height,
             outputs: Outputs::ALL,
             shade_back: false,
+            specular_fix: false,
+            shadows: false,
+            bounces: 0,
+            weight: 0.0,
             triangle_test: TriangleTest::default(),
             sphere_test: SphereTest::default(),
         }

@@ -437,22 +437,28 @@ fn a_closed_stdout_is_not_an_error() {
 #[test]
 fn warnings_name_file_line_and_column() {
     let dir = tempfile::tempdir().unwrap();
-    let phong = std::fs::canonicalize("scenes/phong_material.txt").unwrap();
     let unlit = dir.path().join("unlit.txt");
     std::fs::write(
         &unlit,
         "OrthographicCamera { center 0 0 10 direction 0 0 -1 up 0 1 0 size 5 }\n\n  Lights { numLights 0 }\n",
     )
     .unwrap();
+    // A second scene whose empty Lights block sits at line 2, column 1, after a Background.
+    let shaded = dir.path().join("shaded.txt");
+    std::fs::write(
+        &shaded,
+        "OrthographicCamera { center 0 0 10 direction 0 0 -1 up 0 1 0 size 5 }\n\
+         Lights { numLights 0 } Background { ambientLight 0.5 0.5 0.5 }\n",
+    )
+    .unwrap();
     let render = |scene: &Path| cpu_render_in(dir.path(), scene, &["-output", "o.tga"]);
-    // The first PhongMaterial of scenes/phong_material.txt is at line 30, column 5.
-    let result = render(&phong);
+    let result = render(&shaded);
     assert!(result.status.success(), "{}", stderr(&result));
-    let phong_warning = format!(
-        "{}:30:5: warning: PhongMaterial: specular, reflective and transparent terms are ignored",
-        phong.display()
+    let shaded_warning = format!(
+        "{}:2:1: warning: no lights: ambient light set to 1 1 1 (flat colour), replacing the file's ambientLight 0.5 0.5 0.5",
+        shaded.display()
     );
-    assert_eq!(stderr(&result), format!("raycaster: {phong_warning}\n"));
+    assert_eq!(stderr(&result), format!("raycaster: {shaded_warning}\n"));
     let result = render(&unlit);
     let unlit_warning =
         format!("{}:3:3: warning: no lights: ambient light set to 1 1 1 (flat colour)", unlit.display());
@@ -460,7 +466,7 @@ fn warnings_name_file_line_and_column() {
 
     let commands = format!(
         "\n-input {} -size 8 8 -output a.tga\n-input {} -size 8 8 -output b.tga\n",
-        phong.display(),
+        shaded.display(),
         unlit.display()
     );
     std::fs::write(dir.path().join("commands.txt"), commands).unwrap();
@@ -468,7 +474,7 @@ fn warnings_name_file_line_and_column() {
     assert!(result.status.success(), "{}", stderr(&result));
     assert_eq!(
         stderr(&result),
-        format!("raycaster: commands.txt:2: {phong_warning}\nraycaster: commands.txt:3: {unlit_warning}\n")
+        format!("raycaster: commands.txt:2: {shaded_warning}\nraycaster: commands.txt:3: {unlit_warning}\n")
     );
 }
 
@@ -681,4 +687,181 @@ fn flag_equals_value_and_did_you_mean() {
         assert_eq!(message.trim_end().lines().count(), 1, "{args:?}: {message}");
         assert!(message.contains(needle), "{args:?}: {message}");
     }
+}
+
+/// The course's assignment 3 lines carry `-gui`, `-tessellation θ φ` and `-gouraud`, which
+/// shape its OpenGL preview, not the file: they are accepted, one notice says no window is
+/// opened, and the image is the one the line writes without them. `-gui` with no image
+/// flag renders nothing, says so and exits 0; a malformed `-tessellation` is a usage error.
+#[test]
+fn preview_flags_are_accepted_and_change_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = common::bin::scene("spheres_ortho.txt");
+    let render = |extra: &[&str], image: &str| {
+        let args =
+            [&["-input", scene.as_str(), "-size", "16", "12", "-output", image, "--backend", "cpu"], extra].concat();
+        raycaster_in(dir.path(), &args)
+    };
+    let plain = render(&[], "plain.tga");
+    assert!(plain.status.success() && plain.stderr.is_empty(), "{}", stderr(&plain));
+    let preview = render(&["-gui", "-tessellation", "100", "50", "-gouraud"], "preview.tga");
+    assert!(preview.status.success(), "{}", stderr(&preview));
+    assert_eq!(
+        stderr(&preview),
+        "raycaster: note: -gui, -tessellation and -gouraud shape the course's OpenGL preview: no window is opened\n"
+    );
+    assert_eq!(
+        std::fs::read(dir.path().join("preview.tga")).unwrap(),
+        std::fs::read(dir.path().join("plain.tga")).unwrap()
+    );
+    // -q silences the notice.
+    let quiet = render(&["-gui", "-q"], "quiet.tga");
+    assert!(quiet.status.success() && quiet.stderr.is_empty(), "{}", stderr(&quiet));
+
+    let before = file_names(dir.path());
+    let window_only = raycaster_in(dir.path(), &["-input", scene.as_str(), "-size", "16", "12", "-gui"]);
+    assert_eq!(window_only.status.code(), Some(0), "{}", stderr(&window_only));
+    assert_eq!(
+        stderr(&window_only),
+        "raycaster: note: -gui without -output, -normals or -depth: no window is opened, nothing rendered\n"
+    );
+    assert_eq!(file_names(dir.path()), before);
+    // Without -gui, a line that writes nothing is still an error.
+    let nothing = raycaster_in(dir.path(), &["-input", scene.as_str(), "-size", "16", "12", "-gouraud"]);
+    assert_eq!(nothing.status.code(), Some(2));
+    assert!(stderr(&nothing).contains("nothing to write"), "{}", stderr(&nothing));
+    for (bad, message) in [
+        (&["-tessellation", "10"][..], "-tessellation expects two numbers of steps: THETA PHI"),
+        (&["-tessellation", "0", "5"][..], "-tessellation: '0' is not a whole number of steps, 1 or more"),
+        (&["-tessellation", "10", "x"][..], "-tessellation: 'x' is not a whole number of steps, 1 or more"),
+    ] {
+        let result = render(bad, "bad.tga");
+        assert_eq!(result.status.code(), Some(2), "{bad:?}");
+        assert!(stderr(&result).contains(message), "{bad:?}: {}", stderr(&result));
+    }
+    let typo = render(&["--specular-fx"], "typo.tga");
+    assert!(stderr(&typo).contains("did you mean '--specular-fix'?"), "{}", stderr(&typo));
+}
+
+/// `--specular-fix` changes a scene with a specular lobe (scenes/phong_material.txt) and
+/// leaves a specular-free one byte for byte as it was.
+#[test]
+fn specular_fix_changes_only_specular_scenes() {
+    let dir = tempfile::tempdir().unwrap();
+    for (name, changes) in [("phong_material.txt", true), ("spheres_ortho.txt", false)] {
+        let scene = common::bin::scene(name);
+        let run = |extra: &[&str], image: &str| {
+            let args = [&["-input", scene.as_str(), "-size", "64", "64", "-output", image, "--backend", "cpu"], extra]
+                .concat();
+            let result = raycaster_in(dir.path(), &args);
+            assert!(result.status.success(), "{}", stderr(&result));
+            std::fs::read(dir.path().join(image)).unwrap()
+        };
+        let plain = run(&[], "plain.tga");
+        let fixed = run(&["--specular-fix"], "fixed.tga");
+        assert_eq!(plain != fixed, changes, "{name}");
+    }
+}
+
+/// The GPU kernel shades neither specular terms nor point lights yet: `--backend gpu`
+/// refuses such a scene with one located line and status 1, writing nothing; `auto` (at a
+/// size where it does try the GPU) renders it with the reference, says so in one line and
+/// writes the very image `--backend cpu` writes.
+#[test]
+fn gpu_refuses_what_it_does_not_shade_and_auto_falls_back() {
+    if common::gpu().is_none() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let point = dir.path().join("point.txt");
+    std::fs::write(
+        &point,
+        "OrthographicCamera { center 0 0 10 direction 0 0 -1 up 0 1 0 size 5 }\n\
+         Lights { numLights 2 DirectionalLight { direction 0 0 -1 color 0.2 0.2 0.2 }\n\
+         \x20 PointLight { position 0 0 5 color 1 1 1 attenuation 0 0 0.04 } }\n\
+         Materials { numMaterials 1 Material { diffuseColor 1 0.5 0.25 } }\n\
+         Group { numObjects 1 MaterialIndex 0 Sphere { center 0 0 0 radius 2 } }\n",
+    )
+    .unwrap();
+    let phong = std::fs::canonicalize("scenes/phong_material.txt").unwrap();
+    for (scene, place, what) in [(&point, "3:3", "PointLight"), (&phong, "30:5", "material 0: specularColor 1 1 1")] {
+        let out = |name: &str| dir.path().join(name).to_str().unwrap().to_string();
+        let run = |backend: &str, image: &str| {
+            raycaster(&["-input", path_str(scene), "-size", "1500", "1500", "-output", image, "--backend", backend])
+        };
+        let located = format!("{}:{place}: {what}: the GPU kernel does not shade this yet", scene.display());
+        let gpu = run("gpu", &out("gpu.tga"));
+        assert_eq!(gpu.status.code(), Some(1), "{}", stderr(&gpu));
+        assert_eq!(stderr(&gpu), format!("raycaster: {located}; render it with --backend cpu\n"));
+        assert!(!Path::new(&out("gpu.tga")).exists());
+
+        let auto = run("auto", &out("auto.tga"));
+        assert_eq!(auto.status.code(), Some(0), "{}", stderr(&auto));
+        assert_eq!(
+            stderr(&auto),
+            format!("raycaster: warning: {located}; rendering with the f64 CPU reference instead\n")
+        );
+        let cpu = run("cpu", &out("cpu.tga"));
+        assert!(cpu.status.success() && cpu.stderr.is_empty(), "{}", stderr(&cpu));
+        assert_eq!(std::fs::read(out("auto.tga")).unwrap(), std::fs::read(out("cpu.tga")).unwrap());
+    }
+}
+
+/// The course's own a3 commands.txt runs as a batch: one notice for the preview flags,
+/// whatever the number of lines that carry them.
+#[test]
+fn a_batch_of_preview_lines_says_so_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = common::bin::scene("spheres_ortho.txt");
+    let line = format!("-input {scene} -size 8 8 -output o.tga -gui -tessellation 10 5");
+    std::fs::write(
+        dir.path().join("commands.txt"),
+        format!("{line}\n{line} -gouraud\n-input {scene} -size 8 8 -gui\n"),
+    )
+    .unwrap();
+    let result = raycaster_in(dir.path(), &["batch", "commands.txt", "--backend", "cpu"]);
+    assert!(result.status.success(), "{}", stderr(&result));
+    assert_eq!(
+        stderr(&result),
+        "raycaster: commands.txt:1: note: -gui, -tessellation and -gouraud shape the course's OpenGL preview: \
+         no window is opened\n\
+         raycaster: commands.txt:3: note: -gui without -output, -normals or -depth: no window is opened, nothing rendered\n"
+    );
+}
+
+/// `-shadows`, `-bounces N` and `-weight W` (GRAMMAR.md A4) are the reference's: the GPU
+/// refuses `-shadows` in a scene with lights, `auto` falls back with one warning, and the
+/// values are checked like every other flag's.
+#[test]
+fn shadows_bounces_and_weight() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = std::fs::canonicalize("scenes/spheres_ortho.txt").unwrap();
+    let run = |extra: &[&str]| {
+        let args = [&["-input", path_str(&scene), "-size", "1500", "1500", "-output", "o.tga"], extra].concat();
+        raycaster_in(dir.path(), &args)
+    };
+    for (bad, message) in [
+        (&["-bounces", "x"][..], "-bounces: 'x' is not a whole number from 0 to 1000"),
+        (&["-bounces", "1001"][..], "-bounces: '1001' is not a whole number from 0 to 1000"),
+        (&["-weight", "-0.5"][..], "-weight: '-0.5' is not a number ≥ 0"),
+        (&["-weight", "nan"][..], "-weight: 'nan' is not a number ≥ 0"),
+    ] {
+        let result = run(bad);
+        assert_eq!(result.status.code(), Some(2), "{bad:?}");
+        assert!(stderr(&result).contains(message), "{bad:?}: {}", stderr(&result));
+    }
+    if common::gpu().is_none() {
+        return;
+    }
+    let refusal = format!("{}: -shadows (shadow rays): the GPU kernel does not shade this yet", scene.display());
+    let gpu = run(&["-shadows", "-bounces", "2", "-weight", "0.01", "--backend", "gpu"]);
+    assert_eq!(gpu.status.code(), Some(1));
+    assert_eq!(stderr(&gpu), format!("raycaster: {refusal}; render it with --backend cpu\n"));
+    let auto = run(&["-shadows", "--backend", "auto"]);
+    assert_eq!(auto.status.code(), Some(0));
+    assert_eq!(stderr(&auto), format!("raycaster: warning: {refusal}; rendering with the f64 CPU reference instead\n"));
+    // Without reflective or transparent materials, -bounces and -weight change nothing the
+    // kernel renders: it honours them.
+    let bounces = run(&["-bounces", "3", "-weight", "0.5", "--backend", "gpu"]);
+    assert!(bounces.status.success() && bounces.stderr.is_empty(), "{}", stderr(&bounces));
 }

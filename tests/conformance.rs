@@ -5,28 +5,12 @@
 
 mod common;
 
-use common::corpus;
+use common::{copy_course_folder, corpus, course_commands};
 use raycaster::metrics::image_diff;
-use std::path::Path;
 use std::process::Command;
 
 /// The largest share of pixels off by more than one level, per image and backend.
 const MAX_OFF_FRACTION: f64 = 0.001;
-
-fn copy_course_folder(corpus: &Path, to: &Path) {
-    let from = corpus.join("a2");
-    for entry in std::fs::read_dir(&from).expect("the course's a2/ is readable") {
-        let path = entry.unwrap().path();
-        if path.is_file() {
-            std::fs::copy(&path, to.join(path.file_name().unwrap())).unwrap();
-        }
-    }
-}
-
-fn course_commands(corpus: &Path) -> Vec<Vec<String>> {
-    let text = std::fs::read_to_string(corpus.join("a2/commands.txt")).unwrap();
-    text.lines().filter(|l| !l.trim().is_empty()).map(|l| l.split_whitespace().map(String::from).collect()).collect()
-}
 
 /// The image files a command line writes (the value after -output/-normals, the third after -depth).
 fn outputs_of(command: &[String]) -> Vec<String> {
@@ -47,8 +31,8 @@ fn conformance(backend: &str) {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
-    copy_course_folder(&corpus, dir.path());
-    let commands = course_commands(&corpus);
+    copy_course_folder(&corpus, "a2", dir.path());
+    let commands = course_commands(&corpus, "a2");
     assert_eq!(commands.len(), 18, "the course has 18 command lines");
     let mut failures = Vec::new();
     let mut images = 0;

@@ -4,8 +4,8 @@
 use glam::{DMat4, DVec3};
 use proptest::prelude::*;
 use raycaster::scene::{
-    load_obj, load_scene, parse_obj, parse_scene, Location, Material, Object, Projection, Scene, SceneError, Shape,
-    MAX_NESTING,
+    load_obj, load_scene, parse_obj, parse_scene, Light, Location, Material, Object, PointLight, Projection, Scene,
+    SceneError, Shape, MAX_NESTING,
 };
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -132,8 +132,8 @@ fn scene2_01_values() {
     assert_eq!(camera.up, DVec3::Y);
     assert_eq!(camera.location, Location { line: 2, col: 1 });
     assert_eq!(scene.lights.len(), 1);
-    assert_eq!(scene.lights[0].direction, DVec3::new(-0.5, -0.5, -1.0));
-    assert_eq!(scene.lights[0].color, DVec3::ONE);
+    assert_eq!(dir_of(&scene.lights[0]), DVec3::new(-0.5, -0.5, -1.0));
+    assert_eq!(scene.lights[0].color(), DVec3::ONE);
     assert_eq!(scene.background.color, DVec3::new(0.2, 0.0, 0.6));
     assert_eq!(scene.background.ambient, DVec3::ZERO);
     assert_eq!(scene.materials.len(), 1);
@@ -148,8 +148,8 @@ fn scene2_03_blocks_in_another_order() {
     let Some(a2) = course_dir() else { return };
     let scene = course_scene(&a2, "scene2_03_colored_lights.txt");
     assert_eq!(scene.lights.len(), 3);
-    assert_eq!(scene.lights[1].direction, DVec3::new(-0.5, -1.0, 0.0));
-    assert_eq!(scene.lights[1].color, DVec3::new(0.0, 0.0, 0.8));
+    assert_eq!(dir_of(&scene.lights[1]), DVec3::new(-0.5, -1.0, 0.0));
+    assert_eq!(scene.lights[1].color(), DVec3::new(0.0, 0.0, 0.8));
     assert_eq!(scene.background.color, DVec3::ONE);
     assert_eq!(scene.background.ambient, DVec3::splat(0.2));
     assert_eq!(scene.camera.direction, DVec3::new(0.0, -1.0, -1.0));
@@ -348,9 +348,9 @@ fn lights_and_background_fields() {
          DirectionalLight {{ direction 0 -1 0 color 0 0 1 }} }} Background {{ ambientLight 0.1 0.1 0.1 color 0 1 0 }}"
     ));
     assert_eq!(scene.lights.len(), 2);
-    assert_eq!(scene.lights[0].direction, DVec3::new(1.0, 2.0, 3.0));
-    assert_eq!(scene.lights[0].color, DVec3::X);
-    assert_eq!(scene.lights[1].color, DVec3::Z);
+    assert_eq!(dir_of(&scene.lights[0]), DVec3::new(1.0, 2.0, 3.0));
+    assert_eq!(scene.lights[0].color(), DVec3::X);
+    assert_eq!(scene.lights[1].color(), DVec3::Z);
     assert_eq!(scene.background.color, DVec3::Y);
     assert_eq!(scene.background.ambient, DVec3::splat(0.1));
     // Background fields are optional: the defaults stay.
@@ -359,12 +359,18 @@ fn lights_and_background_fields() {
     assert_eq!(scene.background.ambient, DVec3::ZERO);
 }
 
+/// The direction of a light the test knows to be directional.
+fn dir_of(light: &raycaster::scene::Light) -> DVec3 {
+    light.directional().expect("a DirectionalLight").direction
+}
+
 #[test]
-fn materials_default_colour_and_phong_warns_once() {
+fn materials_default_colour_and_phong_terms_without_warning() {
+    // `Material` is a synonym of `PhongMaterial` (GRAMMAR.md A3): the same fields.
     let scene = parse(&format!(
         "{CAMERA} {LIGHTS} Materials {{ numMaterials 3 Material {{ }} \
          PhongMaterial {{ diffuseColor 0.1 0.2 0.3 specularColor 1 0.5 0.25 exponent 20 reflectiveColor 0.4 0 0 \
-         transparentColor 0 0.6 0 indexOfRefraction 1.5 }} PhongMaterial {{ }} }}"
+         transparentColor 0 0.6 0 indexOfRefraction 1.5 }} Material {{ }} }}"
     ));
     // Every term as written; what a file leaves out takes the course parser's defaults
     // (GRAMMAR.md, A3 and A4): diffuse 1 1 1, exponent 1, index 1, the colours 0 0 0.
@@ -385,15 +391,64 @@ fn materials_default_colour_and_phong_warns_once() {
         index_of_refraction: 1.5,
     };
     assert_eq!(scene.materials, vec![defaults, phong, defaults]);
-    // One warning, at the first PhongMaterial (line 1, after the camera, lights and `Materials { numMaterials 3 Material { } `).
-    let col = format!("{CAMERA} {LIGHTS} Materials {{ numMaterials 3 Material {{ }} ").chars().count() as u32 + 1;
-    let messages: Vec<String> = scene.warnings.iter().map(|w| w.to_string()).collect();
+    // The reference shades every term now: nothing to warn about.
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    // Each material's keyword is where the GPU's refusal points.
+    let first = format!("{CAMERA} {LIGHTS} Materials {{ numMaterials 3 ").chars().count() as u32 + 1;
+    assert_eq!(scene.material_locations[0], Location { line: 1, col: first });
+    assert_eq!(scene.material_locations.len(), 3);
+    // `Material` takes every PhongMaterial field.
+    let synonym = parse(&format!(
+        "{CAMERA} {LIGHTS} Materials {{ numMaterials 1 Material {{ diffuseColor 0.1 0.2 0.3 specularColor 1 0.5 0.25 \
+         exponent 20 reflectiveColor 0.4 0 0 transparentColor 0 0.6 0 indexOfRefraction 1.5 }} }}"
+    ));
+    assert_eq!(synonym.materials, vec![phong]);
+}
+
+#[test]
+fn point_lights_in_file_order_with_default_attenuation() {
+    let scene = parse(&format!(
+        "{CAMERA} Lights {{ numLights 3 PointLight {{ position 1 2 3 color 0.5 0.5 0.5 }} \
+         DirectionalLight {{ direction 0 -1 0 color 0 0 1 }} \
+         PointLight {{ attenuation 0 0.2 0.05 color 1 0 0 position -1 0 0 }} }}"
+    ));
+    let col = format!("{CAMERA} Lights {{ numLights 3 ").chars().count() as u32 + 1;
     assert_eq!(
-        messages,
-        vec![format!(
-            "test.txt:1:{col}: warning: PhongMaterial: specular, reflective and transparent terms are ignored"
-        )]
+        scene.lights[0],
+        Light::Point(PointLight {
+            position: DVec3::new(1.0, 2.0, 3.0),
+            color: DVec3::splat(0.5),
+            attenuation: DVec3::new(1.0, 0.0, 0.0),
+            location: Location { line: 1, col },
+        })
     );
+    assert_eq!(dir_of(&scene.lights[1]), DVec3::NEG_Y);
+    match scene.lights[2] {
+        Light::Point(light) => {
+            assert_eq!(light.attenuation, DVec3::new(0.0, 0.2, 0.05));
+            assert_eq!(light.position, DVec3::NEG_X);
+        }
+        other => panic!("expected a PointLight, found {other:?}"),
+    }
+}
+
+#[test]
+fn point_light_errors_are_located() {
+    let head = format!("{CAMERA} Lights {{ numLights 1 PointLight {{ position 0 0 0 color 1 1 1 ");
+    let at = head.chars().count() as u32;
+    // The first coefficient's place, after `attenuation `.
+    let col = at + "attenuation ".len() as u32 + 1;
+    for (rest, message) in [
+        ("attenuation 0 0 0 } }", "attenuation must be three coefficients ≥ 0, not all 0, found 0 0 0"),
+        ("attenuation 1 -0.5 0 } }", "attenuation must be three coefficients ≥ 0, not all 0, found 1 -0.5 0"),
+    ] {
+        let error = assert_error_at(&format!("{head}{rest}"), 1, col, message);
+        assert_eq!(error.to_string(), format!("test.txt:1:{col}: {message}"));
+    }
+    let error = parse_err(&format!("{CAMERA} Lights {{ numLights 1 PointLight {{ color 1 1 1 }} }}"));
+    assert!(error.message.contains("PointLight is missing `position`"), "{error}");
+    let error = parse_err(&format!("{CAMERA} Lights {{ numLights 1 SpotLight {{ }} }}"));
+    assert!(error.message.contains("DirectionalLight or PointLight"), "{error}");
 }
 
 #[test]
@@ -579,12 +634,7 @@ fn unknown_field_is_named_with_the_expected_ones() {
 #[test]
 fn unknown_object_and_light_and_material() {
     assert_error_at(&with_header(&["Group { numObjects 1", "  Cube { }", "}"]), 5, 3, "unknown object `Cube`");
-    assert_error_at(
-        &format!("{CAMERA}\nLights {{ numLights 1 PointLight {{ }} }}"),
-        2,
-        22,
-        "unknown light `PointLight`",
-    );
+    assert_error_at(&format!("{CAMERA}\nLights {{ numLights 1 SpotLight {{ }} }}"), 2, 22, "unknown light `SpotLight`");
     assert_error_at(
         &format!("{CAMERA}\nMaterials {{ numMaterials 1 Metal {{ }} }}"),
         2,

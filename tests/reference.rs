@@ -274,3 +274,207 @@ fn occluded_agrees_with_closest_hit_on_the_scenes() {
     assert!(checked >= 30, "only {checked} scenes loaded");
     assert!(total.occluded > 1000 && total.clear > 1000, "one answer too rare to have been tested: {total:?}");
 }
+
+/// A unit sphere's pole (normal +z) seen from above by an orthographic camera (V = +z),
+/// lit from 45° (L = (0, 1, 1)/√2): N·L = 1/√2 and the half vector lies halfway, at 22.5°
+/// from N, so N·H = cos 22.5° and (N·H)⁸ = ((1 + cos 45°)/2)⁴ = ((2 + √2)/4)⁴.
+const SPECULAR_POLE: &str = "
+OrthographicCamera { center 0 0 10 direction 0 0 -1 up 0 1 0 size 4 }
+Lights { numLights 1 DirectionalLight { direction 0 -1 -1 color 1 0.8 1 } }
+Materials { numMaterials 1 PhongMaterial { diffuseColor 0.2 0.2 0.2 specularColor 0.5 0.25 0 exponent 8 } }
+Group { numObjects 1 MaterialIndex 0 Sphere { center 0 0 0 radius 1 } }
+";
+
+/// The Blinn–Torrance term at a hand-computed pixel, without and with the specular fix
+/// (which multiplies the lobe by N·L).
+#[test]
+fn specular_term_at_the_pole() {
+    let s = scene(SPECULAR_POLE);
+    let centre = 50 * 101 + 50;
+    let cos_light = 0.5f64.sqrt();
+    let lobe = ((2.0 + 2f64.sqrt()) / 4.0).powi(4);
+    let light = DVec3::new(1.0, 0.8, 1.0);
+    let (diffuse, specular) = (DVec3::splat(0.2), DVec3::new(0.5, 0.25, 0.0));
+    for fix in [false, true] {
+        let options = RenderOptions { specular_fix: fix, ..RenderOptions::all(101, 101) };
+        let frame = raycaster::cpu::render(&s, &options);
+        let weight = if fix { lobe * cos_light } else { lobe };
+        let expected = cos_light * light * diffuse + weight * light * specular;
+        for k in 0..3 {
+            assert!(
+                close(frame.color[centre][k] as f64, expected[k], 1e-6),
+                "fix {fix}, channel {k}: {:?} vs {expected}",
+                frame.color[centre]
+            );
+        }
+    }
+}
+
+/// A light just behind the surface's tangent plane (N·L < 0) gives no specular term, with
+/// or without the fix, even though the half vector still leans towards N (N·H > 0).
+#[test]
+fn no_specular_from_behind_the_surface() {
+    let s = scene(&SPECULAR_POLE.replace("direction 0 -1 -1", "direction 0 -1 0.2"));
+    for fix in [false, true] {
+        let options = RenderOptions { specular_fix: fix, ..RenderOptions::all(101, 101) };
+        assert_eq!(raycaster::cpu::render(&s, &options).color[50 * 101 + 50], [0.0, 0.0, 0.0], "fix {fix}");
+    }
+}
+
+/// A point light 5 units above a plane z = 0 with attenuation 0 0.2 0.05: straight below
+/// it d = 5, N·L = 1 and the divisor is 0.2·5 + 0.05·25 = 2.25; 1.6 units aside,
+/// d = √(1.6² + 5²), N·L = 5/d and the divisor is 0.2·d + 0.05·d².
+#[test]
+fn point_light_attenuation() {
+    let text = "
+OrthographicCamera { center 0 0 10 direction 0 0 -1 up 0 1 0 size 4 }
+Lights { numLights 1 PointLight { position 0 0 5 color 1 1 1 attenuation 0 0.2 0.05 } }
+Materials { numMaterials 1 Material { diffuseColor 0.9 0.45 0.225 } }
+Group { numObjects 1 MaterialIndex 0 Plane { normal 0 0 1 offset 0 } }
+";
+    let frame = raycaster::cpu::render(&scene(text), &RenderOptions::all(5, 5));
+    let diffuse = DVec3::new(0.9, 0.45, 0.225);
+    // Row 2 of 5 is y = 0; columns 2 and 4 are x = 0 and x = 1.6 (pixels 0.8 wide).
+    let d = (1.6f64 * 1.6 + 25.0).sqrt();
+    for (pixel, expected) in [(2 * 5 + 2, diffuse / 2.25), (2 * 5 + 4, diffuse * (5.0 / d) / (0.2 * d + 0.05 * d * d))]
+    {
+        for k in 0..3 {
+            assert!(
+                close(frame.color[pixel][k] as f64, expected[k], 1e-6),
+                "pixel {pixel}, channel {k}: {:?} vs {expected}",
+                frame.color[pixel]
+            );
+        }
+    }
+    // Without `attenuation` (1 0 0) the light does not fall off: 100 units away, straight
+    // above, the plane gets the full diffuse colour.
+    let far = text.replace("position 0 0 5 color 1 1 1 attenuation 0 0.2 0.05", "position 0 0 100 color 1 1 1");
+    let frame = raycaster::cpu::render(&scene(&far), &RenderOptions::all(5, 5));
+    for k in 0..3 {
+        assert!(close(frame.color[12][k] as f64, diffuse[k], 1e-6), "{:?}", frame.color[12]);
+    }
+}
+
+/// Lights add up in file order, a point light and a directional one together.
+#[test]
+fn point_and_directional_lights_add_up() {
+    let text = "
+OrthographicCamera { center 0 0 10 direction 0 0 -1 up 0 1 0 size 4 }
+Lights { numLights 2
+  DirectionalLight { direction 0 0 -1 color 0.25 0 0 }
+  PointLight { position 0 0 2 color 0 0.5 0 attenuation 0.5 0 0 } }
+Background { ambientLight 0 0 0.125 }
+Materials { numMaterials 1 Material { diffuseColor 1 1 1 } }
+Group { numObjects 1 MaterialIndex 0 Plane { normal 0 0 1 offset 0 } }
+";
+    let frame = raycaster::cpu::render(&scene(text), &RenderOptions::all(5, 5));
+    // Red from the directional light, green 0.5/0.5 from the point light, blue ambient.
+    assert_eq!(frame.color[12], [0.25, 1.0, 0.125]);
+}
+
+fn with(options: RenderOptions, shadows: bool, bounces: u32, weight: f64) -> RenderOptions {
+    RenderOptions { shadows, bounces, weight, ..options }
+}
+
+/// A unit sphere at z = 2 between a plane z = 0 and the light. Straight below it the plane
+/// is in shadow with `-shadows` (ambient only) and lit without. A point light at z = 1,
+/// below the sphere, is not blocked by it: the shadow ray stops at the light.
+#[test]
+fn shadow_rays_to_directional_and_point_lights() {
+    let text = "
+OrthographicCamera { center 0 0 10 direction 0 0 -1 up 0 1 0 size 8 }
+Lights { numLights 1 DirectionalLight { direction 0 0 -1 color 0.5 0.5 0.5 } }
+Background { ambientLight 0.25 0.25 0.25 }
+Materials { numMaterials 1 Material { diffuseColor 1 1 1 } }
+Group { numObjects 2 MaterialIndex 0 Plane { normal 0 0 1 offset 0 }
+  Transform { Translate 0 0 2 Transform { Scale 1 1 0.25 Sphere { center 0 0 0 radius 1 } } } }
+";
+    // 9×9 pixels of 8/9 units: the centre pixel looks at the sphere; the top row's middle
+    // pixel (index 4), at x = 0, y = 3.56, misses it and meets the plane, lit from above.
+    let options = RenderOptions::all(9, 9);
+    let s = scene(text);
+    let lit = raycaster::cpu::render(&s, &options);
+    let shadowed = raycaster::cpu::render(&s, &with(options, true, 0, 0.0));
+    assert_eq!(lit.color[4], [0.75, 0.75, 0.75]);
+    assert_eq!(shadowed.color[4], [0.75, 0.75, 0.75], "nothing blocks it");
+    // A light coming in at 45° throws the sphere's shadow 2 units aside, onto x = −2: pixel
+    // column 4 − 2.25 ≈ 2 (x = −1.78) lies in it.
+    let slanted = scene(&text.replace("direction 0 0 -1 color", "direction -1 0 -1 color"));
+    let lit = raycaster::cpu::render(&slanted, &options);
+    let shadowed = raycaster::cpu::render(&slanted, &with(options, true, 0, 0.0));
+    let cos = 0.5f64.sqrt();
+    let full = (0.25 + 0.5 * cos) as f32;
+    assert!((lit.color[4 * 9 + 2][0] - full).abs() < 1e-6, "{:?}", lit.color[4 * 9 + 2]);
+    assert_eq!(shadowed.color[4 * 9 + 2], [0.25, 0.25, 0.25]);
+    // A shadow ray to a point light stops at the light.
+    let point = |sphere: &str| {
+        scene(&format!(
+            "OrthographicCamera {{ center 0 0 10 direction 0 0 -1 up 0 1 0 size 4 }}
+             Lights {{ numLights 1 PointLight {{ position 2 0 1 color 0.5 0.5 0.5 }} }}
+             Background {{ ambientLight 0.25 0.25 0.25 }}
+             Materials {{ numMaterials 1 Material {{ diffuseColor 1 1 1 }} }}
+             Group {{ numObjects 2 MaterialIndex 0 Plane {{ normal 0 0 1 offset 0 }} {sphere} }}"
+        ))
+    };
+    // The centre pixel sees the plane at the origin; the light is at (2, 0, 1), d = √5,
+    // N·L = 1/√5. A sphere on the same line but beyond the light, at (4, 0, 2) (outside the
+    // picture), blocks nothing; one between them, at (1, 0, 0.5), puts the point in shadow.
+    let options = RenderOptions::all(9, 9);
+    let lit = (0.25 + 0.5 / 5f64.sqrt()) as f32;
+    let beyond = raycaster::cpu::render(&point("Sphere { center 4 0 2 radius 0.5 }"), &with(options, true, 0, 0.0));
+    assert!((beyond.color[40][0] - lit).abs() < 1e-6, "{:?}", beyond.color[40]);
+    let between = raycaster::cpu::render(&point("Sphere { center 1 0 0.5 radius 0.2 }"), &with(options, true, 0, 0.0));
+    assert_eq!(between.color[40], [0.25, 0.25, 0.25]);
+}
+
+/// A mirror plane (reflective 0.5, no diffuse) under an orthographic camera looking
+/// straight down: the reflected ray goes straight up and misses, so the pixel is half the
+/// background colour with one bounce, black with none, and black when `-weight` prunes a
+/// ray of weight |(0.5, 0.5, 0.5)| = 0.866.
+#[test]
+fn reflection_weighted_by_the_reflective_colour() {
+    let s = scene(
+        "OrthographicCamera { center 0 0 10 direction 0 0 -1 up 0 1 0 size 4 }
+         Background { color 0.2 0.4 0.8 }
+         Lights { numLights 1 DirectionalLight { direction 0 0 -1 color 1 1 1 } }
+         Materials { numMaterials 1 PhongMaterial { diffuseColor 0 0 0 reflectiveColor 0.5 0.5 0.5 } }
+         Group { numObjects 1 MaterialIndex 0 Plane { normal 0 0 1 offset 0 } }",
+    );
+    let options = RenderOptions::all(1, 1);
+    assert_eq!(raycaster::cpu::render(&s, &with(options, false, 0, 0.0)).color[0], [0.0, 0.0, 0.0]);
+    assert_eq!(raycaster::cpu::render(&s, &with(options, false, 1, 0.0)).color[0], [0.1, 0.2, 0.4]);
+    assert_eq!(raycaster::cpu::render(&s, &with(options, false, 1, 0.86)).color[0], [0.1, 0.2, 0.4]);
+    assert_eq!(raycaster::cpu::render(&s, &with(options, false, 1, 0.87)).color[0], [0.0, 0.0, 0.0]);
+}
+
+/// Snell's law by hand: from index 1 into 1.5 at 45°, sin θt = sin 45° / 1.5; from 1.5 into
+/// 1 at 60°, sin θt would be 1.5 · sin 60° = 1.3 > 1: total internal reflection, no ray.
+#[test]
+fn refraction_follows_snell_and_total_internal_reflection_spawns_nothing() {
+    use raycaster::cpu::refract;
+    let d = DVec3::new(1.0, 0.0, -1.0).normalize();
+    let t = refract(d, DVec3::Z, 1.0, 1.5).expect("no TIR entering a denser medium");
+    let sin_t = 0.5f64.sqrt() / 1.5;
+    assert!((t - DVec3::new(sin_t, 0.0, -(1.0 - sin_t * sin_t).sqrt())).length() < 1e-12, "{t}");
+    let steep = DVec3::new(60f64.to_radians().sin(), 0.0, -60f64.to_radians().cos());
+    assert_eq!(refract(steep, DVec3::Z, 1.5, 1.0), None);
+}
+
+/// A fully transparent sphere (transparentColor 1 1 1, no diffuse) of index 1.5 seen dead
+/// centre: the ray enters and leaves along the normal, unbent, so the pixel shows the
+/// background, after two bounces (in, out), with -shade_back for the hit from inside.
+/// With one bounce the refracted ray's first hit is the sphere's far side from inside,
+/// which shades black (no diffuse, no further bounce).
+#[test]
+fn refraction_through_a_sphere_carries_the_index() {
+    let s = scene(
+        "OrthographicCamera { center 0 0 10 direction 0 0 -1 up 0 1 0 size 4 }
+         Background { color 0.2 0.4 0.8 }
+         Lights { numLights 1 DirectionalLight { direction 0 0 -1 color 1 1 1 } }
+         Materials { numMaterials 1 PhongMaterial { diffuseColor 0 0 0 transparentColor 1 1 1 indexOfRefraction 1.5 } }
+         Group { numObjects 1 MaterialIndex 0 Sphere { center 0 0 0 radius 1 } }",
+    );
+    let options = RenderOptions { shade_back: true, ..RenderOptions::all(1, 1) };
+    assert_eq!(raycaster::cpu::render(&s, &with(options, false, 1, 0.0)).color[0], [0.0, 0.0, 0.0]);
+    assert_eq!(raycaster::cpu::render(&s, &with(options, false, 2, 0.0)).color[0], [0.2, 0.4, 0.8]);
+}

@@ -75,6 +75,17 @@ pub struct RenderArgs {
     pub height: u32,
     pub files: OutputPaths,
     pub shade_back: bool,
+    /// `--specular-fix` (docs/SPEC.md §5).
+    pub specular_fix: bool,
+    /// `-shadows`, `-bounces N`, `-weight W` (docs/SPEC.md §5).
+    pub shadows: bool,
+    pub bounces: u32,
+    pub weight: f64,
+    /// `-gui` was given: with no image flag, the line renders nothing.
+    pub gui: bool,
+    /// `-gui`, `-tessellation` or `-gouraud` was given: they shape only the course's
+    /// OpenGL preview, which we do not open, and a notice says so.
+    pub preview: bool,
     pub backend: BackendChoice,
     pub triangle_test: TriangleTest,
     pub sphere_test: SphereTest,

@@ -14,7 +14,8 @@ const CPU_TILE_PIXELS: u32 = 1 << 18;
 /// A ready renderer.
 pub enum Backend {
     /// The GPU kernel; with `fallback` (`--backend auto`), scenes its f32 kernel cannot
-    /// render faithfully ([`raycaster::gpu::precision`]) go to the CPU reference instead.
+    /// render faithfully ([`raycaster::gpu::precision`]) or does not shade yet
+    /// ([`raycaster::gpu::support`]) go to the CPU reference instead.
     Gpu(Box<GpuRenderer>, Fallback),
     Cpu,
 }
@@ -125,8 +126,8 @@ impl Backend {
     }
 }
 
-/// The GPU's render, or with [`Fallback::Reference`] and a scene the GPU refuses for its
-/// f32 range, the reference's, with a notice naming the value. The GPU refuses before its
+/// The GPU's render, or with [`Fallback::Reference`] and a scene the GPU refuses (its f32
+/// range, or shading it does not implement), the reference's, with a notice naming why. The GPU refuses before its
 /// first tile, so nothing has reached `on_tile` yet and the reference starts from the top.
 fn or_reference<T, E: From<GpuError>>(
     fallback: Fallback,
@@ -137,8 +138,13 @@ fn or_reference<T, E: From<GpuError>>(
     match gpu(on_tile) {
         Ok(stats) => Ok((stats, None)),
         Err(Attempt::Tile(e)) => Err(e),
-        Err(Attempt::Gpu(GpuError::Precision(e))) if fallback == Fallback::Reference => {
-            let notice = format!("{e}; rendering with the f64 CPU reference instead");
+        Err(Attempt::Gpu(e)) if fallback == Fallback::Reference && e.reference_renders_it() => {
+            let reason = match e {
+                GpuError::Precision(e) => e.to_string(),
+                GpuError::Unsupported(e) => e.to_string(),
+                other => other.to_string(),
+            };
+            let notice = format!("{reason}; rendering with the f64 CPU reference instead");
             Ok((reference(on_tile)?, Some(notice)))
         }
         Err(Attempt::Gpu(e)) => Err(e.into()),

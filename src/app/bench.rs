@@ -14,7 +14,7 @@ use raycaster::gpu::{Acceleration, GpuError, GpuOptions, GpuRenderer};
 use raycaster::metrics::{compare_frames, depth_range_of, OutputErrors};
 use raycaster::render::{Frame, Output, Pixel, RenderOptions, TriangleTest};
 use raycaster::scene::{
-    self, Background, Bounds, Camera, DirectionalLight, Material, Mesh, Object, Projection, Scene, Shape,
+    self, Background, Bounds, Camera, DirectionalLight, Light, Material, Mesh, Object, Projection, Scene, Shape,
 };
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -238,9 +238,13 @@ pub fn mesh_scene(name: &str, mesh: Mesh) -> Scene {
             Default::default(),
         )
         .expect("up (+y) is orthogonal to direction (−z)"),
-        lights: vec![DirectionalLight { direction: DVec3::new(-0.5, -0.5, -1.0), color: DVec3::splat(0.9) }],
+        lights: vec![Light::Directional(DirectionalLight {
+            direction: DVec3::new(-0.5, -0.5, -1.0),
+            color: DVec3::splat(0.9),
+        })],
         background: Background { color: DVec3::splat(0.2), ambient: DVec3::splat(0.1) },
         materials: vec![Material::diffuse(DVec3::splat(0.8))],
+        material_locations: Vec::new(),
         root: vec![Object {
             shape: Shape::Mesh { mesh: Arc::new(mesh), material: 0 },
             location: Default::default(),

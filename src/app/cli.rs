@@ -137,13 +137,20 @@ fn render_or_compare(verb: Verb, given: Given) -> Result<Command, UsageError> {
         height,
         files: given.files,
         shade_back: given.shade_back,
+        specular_fix: given.specular_fix,
+        shadows: given.shadows,
+        bounces: given.bounces,
+        weight: given.weight,
+        gui: given.gui,
+        preview: given.gui || given.preview,
         backend: given.backend.unwrap_or_default(),
         triangle_test: given.triangle_test,
         sphere_test: given.sphere_test,
         tile: given.tile,
     };
     if verb == Verb::Render {
-        if named.is_empty() {
+        // `-gui` alone asks for the course's window only: nothing to render, not an error.
+        if named.is_empty() && !given.gui {
             return Err(UsageError("nothing to write: give -output, -normals or -depth".into()));
         }
         return Ok(Command::Render(args));
@@ -216,7 +223,9 @@ impl<'a> Values<'a> {
             Takes::Path(set) => set(given, self.path(text)?),
             Takes::Size(set) => set(given, self.size(text)?),
             Takes::Depth(set) => set(given, self.depth(text)?),
+            Takes::Steps(set) => set(given, self.steps(text)?),
             Takes::Choice { names, set } => set(given, self.choice(text, &names())?),
+            Takes::Real { what, set } => set(given, self.real(text, what)?),
             Takes::Number { what, min, max, set } => set(given, self.number(text, what, *min, *max)?),
             Takes::Split(set) => set(given, self.split(text)?),
             Takes::Outputs(set) => set(given, self.outputs(text)?),
@@ -242,21 +251,36 @@ impl<'a> Values<'a> {
     }
 
     fn size(&mut self, flag: &str) -> Result<(u32, u32), UsageError> {
-        let what = "two sizes: W H";
-        let w = self.take(flag, what)?;
-        let h = self.take(flag, what)?;
-        let side = |v: &OsString| -> Result<u32, UsageError> {
-            let text = v.to_string_lossy();
-            match text.parse::<u32>() {
-                Ok(n) if (1..=MAX_SIDE).contains(&n) => Ok(n),
-                _ => Err(UsageError(format!("{flag}: '{text}' is not a whole number from 1 to {MAX_SIDE}"))),
-            }
-        };
-        let (w, h) = (side(&w)?, side(&h)?);
+        let (w, h) = self.two_whole(flag, "two sizes: W H", 1..=MAX_SIDE, &format!("from 1 to {MAX_SIDE}"))?;
         if w as u64 * h as u64 > MAX_PIXELS {
             return Err(UsageError(format!("{flag} {w} {h}: more than {MAX_PIXELS} pixels")));
         }
         Ok((w, h))
+    }
+
+    fn steps(&mut self, flag: &str) -> Result<(u32, u32), UsageError> {
+        self.two_whole(flag, "two numbers of steps: THETA PHI", 1..=u32::MAX, "of steps, 1 or more")
+    }
+
+    /// Two whole numbers in `range` (`what` names them where they are missing; `range_text`
+    /// says the range where one is not in it).
+    fn two_whole(
+        &mut self,
+        flag: &str,
+        what: &str,
+        range: std::ops::RangeInclusive<u32>,
+        range_text: &str,
+    ) -> Result<(u32, u32), UsageError> {
+        let first = self.take(flag, what)?;
+        let second = self.take(flag, what)?;
+        let whole = |v: &OsString| -> Result<u32, UsageError> {
+            let text = v.to_string_lossy();
+            match text.parse::<u32>() {
+                Ok(n) if range.contains(&n) => Ok(n),
+                _ => Err(UsageError(format!("{flag}: '{text}' is not a whole number {range_text}"))),
+            }
+        };
+        Ok((whole(&first)?, whole(&second)?))
     }
 
     fn depth(&mut self, flag: &str) -> Result<DepthArgs, UsageError> {
@@ -315,6 +339,15 @@ impl<'a> Values<'a> {
     }
 
     /// A whole number from `min` to `max`, `what` saying what it counts ("a number of runs").
+    fn real(&mut self, flag: &str, what: &str) -> Result<f64, UsageError> {
+        let value = self.take(flag, what)?;
+        let text = value.to_string_lossy();
+        match text.parse::<f64>() {
+            Ok(w) if w.is_finite() && w >= 0.0 => Ok(w),
+            _ => Err(UsageError(format!("{flag}: '{text}' is not a number ≥ 0"))),
+        }
+    }
+
     fn number(&mut self, flag: &str, what: &str, min: u64, max: u64) -> Result<u64, UsageError> {
         let value = self.take(flag, what)?;
         let text = value.to_string_lossy();

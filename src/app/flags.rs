@@ -77,6 +77,14 @@ pub struct Given {
     pub size: Option<(u32, u32)>,
     pub files: OutputPaths,
     pub shade_back: bool,
+    pub specular_fix: bool,
+    pub shadows: bool,
+    pub bounces: u32,
+    pub weight: f64,
+    /// `-gui`: the course's OpenGL window, which we do not open.
+    pub gui: bool,
+    /// `-tessellation θ φ` or `-gouraud`: how that window draws spheres.
+    pub preview: bool,
     pub backend: Option<BackendChoice>,
     pub triangle_test: TriangleTest,
     pub sphere_test: SphereTest,
@@ -112,10 +120,17 @@ pub enum Takes {
     Size(fn(&mut Given, (u32, u32))),
     /// `MIN MAX FILE`, finite, `MIN < MAX`.
     Depth(fn(&mut Given, DepthArgs)),
+    /// Two whole numbers ≥ 1 (`-tessellation THETA PHI`).
+    Steps(fn(&mut Given, (u32, u32))),
     /// One of `names()`; the setter gets its index.
     Choice {
         names: fn() -> Vec<&'static str>,
         set: fn(&mut Given, usize),
+    },
+    /// A finite number ≥ 0; `what` names it where it is missing.
+    Real {
+        what: &'static str,
+        set: fn(&mut Given, f64),
     },
     /// A whole number from `min` to `max`; `what` names it where it is missing.
     Number {
@@ -139,7 +154,7 @@ impl Takes {
     /// Whether it takes more than one value. Those cannot be glued on with `=`:
     /// `-size=200 200` would read as if the second value belonged to no flag.
     pub fn several_values(&self) -> bool {
-        matches!(self, Takes::Size(_) | Takes::Depth(_))
+        matches!(self, Takes::Size(_) | Takes::Depth(_) | Takes::Steps(_))
     }
 }
 
@@ -166,6 +181,9 @@ pub struct Flag {
 
 use Verb::{Batch, Bench, Compare, Render, Stitch};
 
+/// The deepest `-bounces` (the reference recurses once per bounce).
+pub const MAX_BOUNCES: u64 = 1000;
+
 const IMAGE_VERBS: Verbs = Verbs::of(&[Render, Compare, Stitch]);
 const RENDER_VERBS: Verbs = Verbs::of(&[Render, Compare]);
 
@@ -181,7 +199,7 @@ pub static FLAGS: &[Flag] = &[
         .help("image size in pixels"),
     Flag::course("output", "FILE", Takes::Path(|g, path| g.files.color = Some(path)), IMAGE_VERBS)
         .once()
-        .help("diffuse-shaded image (.tga or .png; .exr: linear, unclamped)"),
+        .help("shaded image (.tga or .png; .exr: linear, unclamped)"),
     Flag::course("normals", "FILE", Takes::Path(|g, path| g.files.normals = Some(path)), IMAGE_VERBS)
         .once()
         .help("normal visualisation |N| (.tga or .png; .exr: the signed normal)"),
@@ -194,6 +212,27 @@ pub static FLAGS: &[Flag] = &[
         ),
     Flag::course("shade_back", "", Takes::Switch(|g| g.shade_back = true), RENDER_VERBS)
         .help("shade back-facing hits as if they faced the viewer"),
+    Flag::course("shadows", "", Takes::Switch(|g| g.shadows = true), RENDER_VERBS)
+        .help("cast a shadow ray to every light (the reference only)"),
+    Flag::course(
+        "bounces",
+        "N",
+        Takes::Number { what: "a number of bounces", min: 0, max: MAX_BOUNCES, set: |g, n| g.bounces = n as u32 },
+        RENDER_VERBS,
+    )
+    .help("reflected and refracted rays, at most N deep (default 0: local\nshading only)"),
+    Flag::course("weight", "W", Takes::Real { what: "a ray weight", set: |g, w| g.weight = w }, RENDER_VERBS)
+        .help("no secondary ray whose weight falls below W (default 0)"),
+    Flag::course("gui", "", Takes::Switch(|g| g.gui = true), RENDER_VERBS)
+        .help("the course's OpenGL preview: accepted, no window is opened"),
+    Flag::course("tessellation", "THETA PHI", Takes::Steps(|g, _| g.preview = true), RENDER_VERBS)
+        .help("sphere facets of the OpenGL preview: accepted, ignored"),
+    Flag::course("gouraud", "", Takes::Switch(|g| g.preview = true), RENDER_VERBS)
+        .help("smooth spheres in the OpenGL preview: accepted, ignored"),
+    Flag::ours("specular_fix", "", Takes::Switch(|g| g.specular_fix = true), RENDER_VERBS).help(
+        "the handout's optional specular fix: the specular term times\n\
+         N·L (the reference only)",
+    ),
     Flag::ours(
         "backend",
         "B",
@@ -374,6 +413,10 @@ impl Flag {
         let head =
             if self.metavar.is_empty() { self.spelled() } else { format!("{} {}", self.spelled(), self.metavar) };
         let help = self.help.replace('\n', &format!("\n{:25}", ""));
+        if head.chars().count() >= 23 {
+            // Too long to share a line with its help (`-tessellation THETA PHI`).
+            return format!("  {head}\n{:25}{help}\n", "");
+        }
         format!("  {head:<23}{help}\n")
     }
 }
@@ -549,6 +592,8 @@ mod tests {
             assert!(text.contains(flag.help.lines().next().unwrap()), "{}", flag.name);
         }
         assert!(text.contains("Usage: raycaster -input SCENE -size W H [-output FILE]"), "{text}");
+        // A flag too long for the column gets its help on the next line, never glued on.
+        assert!(text.contains("  -tessellation THETA PHI\n                         sphere facets"), "{text}");
         assert!(text.contains("raycaster batch FILE [--backend gpu|cpu|auto] [--shard K/N]\n"), "{text}");
         let compare = text.split("raycaster compare").nth(1).unwrap().split("  Renders").next().unwrap();
         assert!(!compare.contains("--backend") && !compare.contains("--tile"), "{compare}");

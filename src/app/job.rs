@@ -36,8 +36,24 @@ pub fn options_for(args: &RenderArgs) -> RenderOptions {
         height: args.height,
         outputs: args.files.outputs(),
         shade_back: args.shade_back,
+        specular_fix: args.specular_fix,
+        shadows: args.shadows,
+        bounces: args.bounces,
+        weight: args.weight,
         triangle_test: args.triangle_test,
         sphere_test: args.sphere_test,
+    }
+}
+
+/// The notice for a command line with the course's OpenGL preview flags, which shape a
+/// window we do not open (GRAMMAR.md A3): `None` without them.
+pub fn preview_notice(args: &RenderArgs) -> Option<&'static str> {
+    match (args.preview, args.files.outputs().is_empty()) {
+        (false, _) => None,
+        (true, false) => {
+            Some("-gui, -tessellation and -gouraud shape the course's OpenGL preview: no window is opened")
+        }
+        (true, true) => Some("-gui without -output, -normals or -depth: no window is opened, nothing rendered"),
     }
 }
 
@@ -178,7 +194,17 @@ pub fn render_scene(
 /// tests, so the kernel's variants count only on the GPU; the GPU and the reference differ
 /// in the last bits, so the backend counts.
 fn flags_text(args: &RenderArgs, backend: &Backend) -> String {
-    let shade_back = if args.shade_back { " -shade_back" } else { "" };
+    let mut shade_back = String::new();
+    for (given, flag) in
+        [(args.shade_back, " -shade_back"), (args.specular_fix, " --specular-fix"), (args.shadows, " -shadows")]
+    {
+        if given {
+            shade_back += flag;
+        }
+    }
+    if args.bounces > 0 {
+        shade_back += &format!(" -bounces {} -weight {}", args.bounces, args.weight);
+    }
     match backend {
         Backend::Gpu(..) => format!(
             "--backend gpu --triangle-test {} --sphere-test {}{shade_back}",
@@ -281,6 +307,8 @@ pub enum LineReport {
     Warning(SceneWarning),
     /// `auto` rendered the line with the reference, and why.
     Fallback(String),
+    /// Something the line asked for that is not done, as [`preview_notice`] says.
+    Notice(&'static str),
     Failure(String),
     /// The line rendered, in this many milliseconds (parsing, rendering, writing; for
     /// `--verbose`).
@@ -294,6 +322,7 @@ impl fmt::Display for LineReport {
         match self {
             LineReport::Warning(w) => w.fmt(f),
             LineReport::Fallback(notice) => write!(f, "warning: {notice}"),
+            LineReport::Notice(notice) => write!(f, "note: {notice}"),
             LineReport::Failure(message) => f.write_str(message),
             LineReport::Rendered { ms } => write!(f, "{ms:.1} ms"),
         }
@@ -332,13 +361,23 @@ pub fn run_batch(
     let bar = Progress::new(progress, lines.len() as u64, "lines");
     let mut tell = |line: usize, what: LineReport| bar.suspend(|| report(line, what));
     let mut count = BatchCount::default();
+    // The course's own commands.txt has -gui on every line: say it once.
+    let mut preview_told = false;
     for (line_number, line) in lines {
         let words: Vec<&str> = line.split_whitespace().collect();
         count.run += 1;
         let failure = match cli::parse_args(&words).and_then(|c| validate::check(&c).map(|()| c)) {
+            Ok(Command::Render(args)) if args.files.outputs().is_empty() => {
+                tell(line_number, LineReport::Notice(preview_notice(&args).expect("-gui, with nothing to write")));
+                None
+            }
             Ok(Command::Render(args)) => match run(&args, backend, false) {
                 Ok(done) => {
                     let ms = done.parse_ms + done.render_ms + done.write_ms;
+                    if let Some(notice) = preview_notice(&args).filter(|_| !preview_told) {
+                        preview_told = true;
+                        tell(line_number, LineReport::Notice(notice));
+                    }
                     done.warnings.into_iter().for_each(|w| tell(line_number, LineReport::Warning(w)));
                     if let Some(fallback) = done.notice {
                         tell(line_number, LineReport::Fallback(fallback));

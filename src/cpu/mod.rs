@@ -14,10 +14,11 @@ mod prepared;
 
 pub use intersect::{intersect_plane, intersect_sphere, intersect_triangle, sphere_normal, triangle_normal};
 pub use prepared::{Hit, ReferenceScene, Surface};
+// `refract` is defined below and public for the analytic tests.
 
 use crate::camera::{PrimaryRays, Ray};
 use crate::render::{Frame, Output, Pixel, RenderOptions};
-use crate::scene::Scene;
+use crate::scene::{Light, Material, Scene};
 use glam::DVec3;
 use rayon::prelude::*;
 
@@ -87,7 +88,7 @@ impl<'a> Reference<'a> {
         let color = match (&surface, self.options.outputs.contains(Output::Color)) {
             (_, false) => DVec3::ZERO,
             (None, true) => self.prepared.scene.background.color, // §5: a miss
-            (Some(surface), true) => self.shade(surface, &ray),   // §5
+            (Some(surface), true) => self.shade(surface, &ray, Path::PRIMARY), // §5
         };
         write_pixel(surface.as_ref(), color) // §5
     }
@@ -97,10 +98,21 @@ impl<'a> Reference<'a> {
         self.rays.ray(i, j)
     }
 
-    /// docs/SPEC.md §5: ambient plus Lambert's cosine law per directional light, with the
-    /// material's diffuse colour; a back-facing hit is black unless `shade_back`, which
-    /// shades it with the normal turned towards the viewer.
-    fn shade(&self, surface: &Surface, ray: &Ray) -> DVec3 {
+    /// The colour seen along a secondary ray: what it hits, shaded, or the background.
+    fn trace(&self, ray: &Ray, path: Path) -> DVec3 {
+        match self.prepared.closest_hit(ray) {
+            None => self.prepared.scene.background.color,
+            Some(hit) => self.shade(&self.prepared.surface_at(&hit, ray), ray, path),
+        }
+    }
+
+    /// docs/SPEC.md §5: ambient times diffuse, plus for each light in file order (that no
+    /// shadow ray finds blocked, with `-shadows`) Lambert's cosine law and the
+    /// Blinn–Torrance specular lobe, plus the reflected and refracted rays' colours while
+    /// `path` may go deeper; a back-facing hit is black unless `shade_back`, which shades it
+    /// with the normal turned towards the viewer.
+    fn shade(&self, surface: &Surface, ray: &Ray, path: Path) -> DVec3 {
+        let entering = ray.direction.dot(surface.normal) < 0.0;
         let mut normal = surface.normal;
         if ray.direction.dot(normal) > 0.0 {
             if !self.options.shade_back {
@@ -109,14 +121,126 @@ impl<'a> Reference<'a> {
             normal = -normal;
         }
         let scene = self.prepared.scene;
-        let diffuse = self.prepared.material(surface.material).diffuse;
-        let mut color = scene.background.ambient * diffuse;
+        let material = self.prepared.material(surface.material);
+        let mut color = scene.background.ambient * material.diffuse;
         for light in &scene.lights {
-            let to_light = -light.direction.normalize();
-            color += to_light.dot(normal).max(0.0) * light.color * diffuse;
+            let (to_light, light_color) = match light {
+                Light::Directional(light) => (-light.direction.normalize(), light.color),
+                Light::Point(light) => {
+                    let offset = light.position - surface.point;
+                    let d = offset.length();
+                    let [a0, a1, a2] = light.attenuation.to_array();
+                    // The parser makes the coefficients ≥ 0 and not all 0: the divisor is
+                    // positive for d > 0; at the light itself it is kept from reaching 0.
+                    let divisor = (a0 + a1 * d + a2 * d * d).max(f64::MIN_POSITIVE);
+                    (offset / d, light.color / divisor)
+                }
+            };
+            // A light behind the surface adds nothing (§5), so it needs no shadow ray.
+            if self.options.shadows && to_light.dot(normal) > 0.0 {
+                let origin = surface.point + offset_along(normal, surface.point);
+                let mut shadow = Ray::new(origin, to_light, 0.0);
+                if let Light::Point(light) = light {
+                    shadow.t_max = (light.position - origin).length();
+                }
+                if self.prepared.occluded(&shadow) {
+                    continue;
+                }
+            }
+            color += local(material, normal, to_light, light_color, -ray.direction, self.options.specular_fix);
+        }
+        if path.bounces >= self.options.bounces {
+            return color;
+        }
+        let spawn = |direction: DVec3, side: DVec3, weight: DVec3, index: f64| -> DVec3 {
+            let path = Path { bounces: path.bounces + 1, weight: path.weight * weight.length(), index };
+            if weight == DVec3::ZERO || path.weight < self.options.weight {
+                return DVec3::ZERO;
+            }
+            let origin = surface.point + offset_along(side, surface.point);
+            weight * self.trace(&Ray::new(origin, direction, 0.0), path)
+        };
+        // Mirror reflection, on the viewer's side of the surface.
+        let d = ray.direction;
+        color += spawn(d - 2.0 * d.dot(normal) * normal, normal, material.reflective, path.index);
+        // Refraction (GRAMMAR.md A4): objects sit in vacuum, so a ray entering a surface goes
+        // from index 1 into the material's, and one leaving it back to 1.
+        let into = if entering { material.index_of_refraction } else { 1.0 };
+        if let Some(refracted) = refract(d, normal, path.index, into) {
+            color += spawn(refracted, -normal, material.transparent, into);
         }
         color
     }
+}
+
+/// Where a secondary ray is in the recursion of docs/SPEC.md §5.
+#[derive(Clone, Copy, Debug)]
+struct Path {
+    /// Reflections and refractions so far.
+    bounces: u32,
+    /// The product of the lengths of the reflective and transparent colours so far.
+    weight: f64,
+    /// The index of refraction of the medium the ray travels in.
+    index: f64,
+}
+
+impl Path {
+    /// A camera ray: no bounce yet, full weight, in vacuum.
+    const PRIMARY: Path = Path { bounces: 0, weight: 1.0, index: 1.0 };
+}
+
+/// The direction of a unit ray `d` refracted at a surface with unit normal `n` facing it,
+/// from index `from` into index `into` (Snell's law); `None` at total internal reflection.
+pub fn refract(d: DVec3, n: DVec3, from: f64, into: f64) -> Option<DVec3> {
+    let eta = from / into;
+    let cos_in = -d.dot(n);
+    let k = 1.0 - eta * eta * (1.0 - cos_in * cos_in);
+    (k >= 0.0).then(|| (eta * d + (eta * cos_in - k.sqrt()) * n).normalize())
+}
+
+/// How far a secondary ray starts from the hit point `p`, along the unit normal `side`
+/// (towards the side it leaves on), so that it cannot hit the surface it leaves.
+///
+/// The bound: the reference computes `p` in f64 from the ray and the primitive, and the
+/// error of `p` along the normal is a sum of rounding errors of the magnitudes involved,
+/// `|p|`, the ray origin and the primitive's coordinates, each ≤ 2⁻⁵³ relative, times the
+/// operation count of the intersection path (a few tens for a primitive, about ten more
+/// per enclosing Transform, up to the parser's 1000 levels: below 2¹⁴ in all). The offset
+/// is 2⁻³² · max(1, |p|∞), over 2⁷ times that bound for any scene whose coordinates are
+/// within 2¹⁴ of the hit point's magnitude, and still 2⁻³² relative: no visible gap.
+fn offset_along(side: DVec3, p: DVec3) -> DVec3 {
+    const RELATIVE: f64 = 1.0 / 4_294_967_296.0; // 2⁻³²
+    side * RELATIVE * p.abs().max_element().max(1.0)
+}
+
+/// docs/SPEC.md §5: what a surface with unit normal `normal` reflects towards `to_viewer`
+/// (unit) of the light `light_color` arriving from `to_light` (unit): the diffuse term
+/// `max(N·L, 0)·light·diffuse` plus the Blinn–Torrance term `max(N·H, 0)^exponent·light·specular` with
+/// the half vector `H = normalise(L + V)`. The specular term is cut to zero where N·L ≤ 0
+/// (the light is behind the surface), or with `specular_fix` multiplied by `max(N·L, 0)`,
+/// the handout's optional fix for the sharp edge that cut leaves on wide lobes.
+pub fn local(
+    material: &Material,
+    normal: DVec3,
+    to_light: DVec3,
+    light_color: DVec3,
+    to_viewer: DVec3,
+    specular_fix: bool,
+) -> DVec3 {
+    let cos_light = to_light.dot(normal);
+    // Multiplied in this order since A2: directional, specular-free scenes stay bit for bit.
+    let diffuse = cos_light.max(0.0) * light_color * material.diffuse;
+    if material.specular == DVec3::ZERO || cos_light <= 0.0 {
+        return diffuse;
+    }
+    // L + V is zero only when the viewer looks straight at the light from behind the
+    // surface's tangent plane, which N·L > 0 leaves out but for a grazing view.
+    let Some(half) = (to_light + to_viewer).try_normalize() else { return diffuse };
+    let mut lobe = normal.dot(half).max(0.0).powf(material.exponent);
+    if specular_fix {
+        lobe *= cos_light;
+    }
+    diffuse + lobe * light_color * material.specular
 }
 
 /// docs/SPEC.md §5: what the three images need of a pixel, before quantisation: normal and

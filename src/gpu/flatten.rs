@@ -87,6 +87,8 @@ impl SceneBuffers {
         buffers.lights = scene
             .lights
             .iter()
+            // Point lights never get here: `support::check` refuses them first.
+            .filter_map(|l| l.directional())
             .map(|l| GpuLight {
                 to_light: f32x3(-l.direction.normalize()),
                 color: f32x3(l.color),

@@ -14,6 +14,7 @@ pub mod layout;
 pub mod precision;
 mod prepared;
 pub mod shader;
+pub mod support;
 
 use crate::render::{Frame, Output, RenderOptions, SphereTest, TriangleTest};
 use crate::scene::Scene;
@@ -100,6 +101,16 @@ pub enum GpuError {
     Readback(String),
     #[error("{0}; render it with --backend cpu")]
     Precision(precision::PrecisionError),
+    #[error("{0}; render it with --backend cpu")]
+    Unsupported(support::UnsupportedError),
+}
+
+impl GpuError {
+    /// Whether the GPU refused the scene itself (out of its f32 range, or shading it does
+    /// not implement), which the f64 reference renders: `auto` falls back on these.
+    pub fn reference_renders_it(&self) -> bool {
+        matches!(self, GpuError::Precision(_) | GpuError::Unsupported(_))
+    }
 }
 
 /// The `override` constants a kernel is compiled with: only what the scene and the requested

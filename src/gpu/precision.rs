@@ -83,10 +83,7 @@ pub struct PrecisionError {
 
 impl fmt::Display for PrecisionError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}", self.file.display())?;
-        if let Some(Location { line, col }) = self.location {
-            write!(f, ":{line}:{col}")?;
-        }
+        write_place(f, &self.file, self.location)?;
         write!(
             f,
             ": {}: magnitude {} is outside the range the GPU's f32 kernel renders faithfully \
@@ -98,6 +95,15 @@ impl fmt::Display for PrecisionError {
 }
 
 impl std::error::Error for PrecisionError {}
+
+/// `FILE`, or `FILE:LINE:COL` where the place is known: how the GPU's refusals begin.
+pub(super) fn write_place(f: &mut fmt::Formatter<'_>, file: &Path, location: Option<Location>) -> fmt::Result {
+    write!(f, "{}", file.display())?;
+    if let Some(Location { line, col }) = location {
+        write!(f, ":{line}:{col}")?;
+    }
+    Ok(())
+}
 
 /// Whether the f32 kernel renders `scene` at `options` faithfully (see the module's
 /// contract); the first offending value in file order otherwise.
@@ -115,7 +121,7 @@ pub fn check(scene: &Scene, options: &RenderOptions) -> Result<(), PrecisionErro
         checker.scalar(Some(scene.camera.location), what, extent)?;
     }
     for (k, light) in scene.lights.iter().enumerate() {
-        checker.colour(&format!("DirectionalLight {} color", k + 1), light.color)?;
+        checker.colour(&format!("DirectionalLight {} color", k + 1), light.color())?;
     }
     checker.colour("Background color", scene.background.color)?;
     checker.colour("Background ambientLight", scene.background.ambient)?;

@@ -59,6 +59,7 @@ impl<'a> PreparedScene<'a> {
     ) -> Result<PreparedScene<'a>, GpuError> {
         let start = std::time::Instant::now();
         // Refused before any tile is handed out: `auto` then renders with the reference.
+        super::support::check(scene, options).map_err(GpuError::Unsupported)?;
         super::precision::check(scene, options).map_err(GpuError::Precision)?;
         let rays = crate::camera::PrimaryRays::for_camera(&scene.camera, options.width, options.height);
         let buffers = SceneBuffers::new(scene, &rays, &gpu.options);

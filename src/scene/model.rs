@@ -21,12 +21,17 @@ pub struct Scene {
     /// The file the scene was read from (for messages and for resolving `obj_file`).
     pub path: PathBuf,
     pub camera: Camera,
-    pub lights: Vec<DirectionalLight>,
+    /// In file order: shading sums the lights in this order (docs/SPEC.md §5).
+    pub lights: Vec<Light>,
     pub background: Background,
     pub materials: Vec<Material>,
+    /// Where each material was written (its `Material`/`PhongMaterial` keyword), parallel
+    /// to `materials`, for later stages that refuse a term; empty for scenes not read
+    /// from a file.
+    pub material_locations: Vec<Location>,
     /// The objects of the top-level `Group`.
     pub root: Vec<Object>,
-    /// Non-fatal remarks made while reading (no lights, PhongMaterial terms ignored, ...).
+    /// Non-fatal remarks made while reading (no lights, ...).
     pub warnings: Vec<super::SceneWarning>,
 }
 
@@ -111,6 +116,43 @@ impl Camera {
     }
 }
 
+/// A light of the `Lights` block (docs/SPEC.md §2).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Light {
+    Directional(DirectionalLight),
+    Point(PointLight),
+}
+
+impl Light {
+    /// The light's colour as written (before any attenuation).
+    pub fn color(&self) -> DVec3 {
+        match self {
+            Light::Directional(light) => light.color,
+            Light::Point(light) => light.color,
+        }
+    }
+
+    /// The directional light, if this is one.
+    pub fn directional(&self) -> Option<&DirectionalLight> {
+        match self {
+            Light::Directional(light) => Some(light),
+            Light::Point(_) => None,
+        }
+    }
+}
+
+/// `PointLight { position V3 color V3 attenuation a0 a1 a2 }` (GRAMMAR.md A4): light from
+/// `position`, its colour divided by `a0 + a1·d + a2·d²` at distance d.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PointLight {
+    pub position: DVec3,
+    pub color: DVec3,
+    /// `(a0, a1, a2)`, default (1, 0, 0): no fall-off.
+    pub attenuation: DVec3,
+    /// Where the `PointLight` keyword was written.
+    pub location: Location,
+}
+
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct DirectionalLight {
     /// The direction light travels in (as written; not normalised).
@@ -132,9 +174,9 @@ impl Default for Background {
 
 /// A material as the course defines it (`PhongMaterial`, `Material` for short; docs/SPEC.md
 /// §2), with the course parser's defaults for fields a file leaves out
-/// ([`Material::default`]). The renderers shade with `diffuse` only until Phong shading,
-/// reflection and refraction arrive; the other terms are read and kept so that no stage
-/// between the file and the kernel has to change shape when they do.
+/// ([`Material::default`]). The reference shades with the diffuse and specular terms
+/// (docs/SPEC.md §5); the GPU kernel with the diffuse term only, and it refuses a scene
+/// whose materials have any other term (`raycaster::gpu::support`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Material {
     /// `diffuseColor`, default (1, 1, 1).

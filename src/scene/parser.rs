@@ -9,7 +9,9 @@
 
 use super::error::{SceneError, SceneWarning};
 use super::lexer::{describe, parse_count, parse_decimal, read_source, Lexer, Token};
-use super::model::{Background, Camera, DirectionalLight, Location, Material, Mesh, Object, Projection, Scene, Shape};
+use super::model::{
+    Background, Camera, DirectionalLight, Light, Location, Material, Mesh, Object, PointLight, Projection, Scene, Shape,
+};
 use super::obj::load_obj;
 use glam::{DMat3, DMat4, DVec3, DVec4};
 use std::collections::HashMap;
@@ -50,15 +52,14 @@ const TRANSFORM_ITEMS: &str = "a transformation (Scale, UniformScale, Translate,
      ZRotate, Rotate, Matrix) or an object (Group, Sphere, Plane, Triangle, TriangleMesh, Transform)";
 const PHONG_FIELDS: [&str; 6] =
     ["diffuseColor", "specularColor", "exponent", "transparentColor", "reflectiveColor", "indexOfRefraction"];
-const PHONG_WARNING: &str = "PhongMaterial: specular, reflective and transparent terms are ignored";
 
 /// The top-level blocks read so far (each may appear once).
 #[derive(Default)]
 struct TopLevel {
     camera: Option<Camera>,
-    lights: Option<Vec<DirectionalLight>>,
+    lights: Option<Vec<Light>>,
     background: Option<BackgroundBlock>,
-    materials: Option<Vec<Material>>,
+    materials: Option<Vec<(Material, Location)>>,
     root: Option<Vec<Object>>,
     /// Block kind and keyword location, to report duplicates.
     seen: Vec<(&'static str, Location)>,
@@ -361,7 +362,8 @@ impl<'a> Parser<'a> {
         let camera = blocks.camera.ok_or_else(|| {
             SceneError::in_file(self.path, "no camera: expected an OrthographicCamera or PerspectiveCamera block")
         })?;
-        let materials = blocks.materials.unwrap_or_default();
+        let (materials, material_locations): (Vec<Material>, Vec<Location>) =
+            blocks.materials.unwrap_or_default().into_iter().unzip();
         self.check_material_refs(materials.len())?;
         let lights = blocks.lights.unwrap_or_default();
         let mut background =
@@ -378,6 +380,7 @@ impl<'a> Parser<'a> {
             lights,
             background: background.background,
             materials,
+            material_locations,
             root: blocks.root.unwrap_or_default(),
             warnings: self.warnings,
         })
@@ -435,8 +438,8 @@ impl<'a> Parser<'a> {
         Ok(degrees.to_radians())
     }
 
-    fn lights(&mut self, keyword: Token<'a>) -> Result<Vec<DirectionalLight>> {
-        const ITEMS: &str = "`}` or DirectionalLight";
+    fn lights(&mut self, keyword: Token<'a>) -> Result<Vec<Light>> {
+        const ITEMS: &str = "`}`, DirectionalLight or PointLight";
         self.open(keyword)?;
         let mut count = self.count_field(keyword, "numLights", "lights")?;
         let mut lights = Vec::new();
@@ -449,7 +452,11 @@ impl<'a> Parser<'a> {
                 }
                 "DirectionalLight" => {
                     self.check_extra(&mut count, token)?;
-                    lights.push(self.directional_light(token)?);
+                    lights.push(Light::Directional(self.directional_light(token)?));
+                }
+                "PointLight" => {
+                    self.check_extra(&mut count, token)?;
+                    lights.push(Light::Point(self.point_light(token)?));
                 }
                 _ => return Err(self.unknown(token, "light", ITEMS)),
             }
@@ -485,6 +492,41 @@ impl<'a> Parser<'a> {
         })
     }
 
+    /// `PointLight { position V3 color V3 attenuation a0 a1 a2 }`, attenuation optional
+    /// (default 1 0 0). The coefficients must be ≥ 0 and not all 0, so that the divisor
+    /// `a0 + a1·d + a2·d²` is positive wherever d > 0 (GRAMMAR.md A4).
+    fn point_light(&mut self, keyword: Token<'a>) -> Result<PointLight> {
+        let (mut position, mut color, mut attenuation) = (None, None, DVec3::X);
+        let close = self.fields_block(keyword, &["position", "color", "attenuation"], |p, field| {
+            match field.text {
+                "position" => position = Some(p.vec3()?.0),
+                "color" => color = Some(p.vec3()?.0),
+                _ => {
+                    let (a, at) = p.vec3()?;
+                    if a.min_element() < 0.0 || a == DVec3::ZERO {
+                        return Err(p.error(
+                            at,
+                            format!(
+                                "attenuation must be three coefficients ≥ 0, not all 0, found {} {} {}",
+                                show1(a.x),
+                                show1(a.y),
+                                show1(a.z)
+                            ),
+                        ));
+                    }
+                    attenuation = a;
+                }
+            }
+            Ok(())
+        })?;
+        Ok(PointLight {
+            position: self.required(position, keyword, "position", close)?,
+            color: self.required(color, keyword, "color", close)?,
+            attenuation,
+            location: keyword.location,
+        })
+    }
+
     fn background(&mut self, keyword: Token<'a>) -> Result<BackgroundBlock> {
         let mut background = Background::default();
         let mut ambient_given = false;
@@ -499,7 +541,7 @@ impl<'a> Parser<'a> {
         Ok(BackgroundBlock { background, ambient_given })
     }
 
-    fn materials(&mut self, keyword: Token<'a>) -> Result<Vec<Material>> {
+    fn materials(&mut self, keyword: Token<'a>) -> Result<Vec<(Material, Location)>> {
         const ITEMS: &str = "`}`, Material or PhongMaterial";
         self.open(keyword)?;
         let mut count = self.count_field(keyword, "numMaterials", "materials")?;
@@ -513,7 +555,7 @@ impl<'a> Parser<'a> {
                 }
                 "Material" | "PhongMaterial" => {
                     self.check_extra(&mut count, token)?;
-                    materials.push(self.material(token)?);
+                    materials.push((self.material(token)?, token.location));
                 }
                 _ => return Err(self.unknown(token, "material", ITEMS)),
             }
@@ -522,11 +564,10 @@ impl<'a> Parser<'a> {
         Ok(materials)
     }
 
+    /// `Material` and `PhongMaterial` are synonyms (GRAMMAR.md A3), with the same fields.
     fn material(&mut self, keyword: Token<'a>) -> Result<Material> {
-        let phong = keyword.text == "PhongMaterial";
-        let fields: &[&'static str] = if phong { &PHONG_FIELDS } else { &["diffuseColor"] };
         let mut material = Material::default();
-        self.fields_block(keyword, fields, |p, field| {
+        self.fields_block(keyword, &PHONG_FIELDS, |p, field| {
             match field.text {
                 "diffuseColor" => material.diffuse = p.vec3()?.0,
                 "specularColor" => material.specular = p.vec3()?.0,
@@ -537,10 +578,6 @@ impl<'a> Parser<'a> {
             }
             Ok(())
         })?;
-        // Kept in the model, but the shading does not use them yet: say so once.
-        if phong && !self.warnings.iter().any(|w| w.message == PHONG_WARNING) {
-            self.warnings.push(SceneWarning::new(self.path, Some(keyword.location), PHONG_WARNING));
-        }
         Ok(material)
     }
 

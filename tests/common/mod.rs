@@ -65,3 +65,20 @@ pub fn gpu_with(acceleration: raycaster::gpu::Acceleration) -> Option<GpuRendere
 /// covers the bins and the hierarchy whatever the cost model picks at the test's sizes.
 pub const ACCELERATIONS: [raycaster::gpu::Acceleration; 3] =
     [raycaster::gpu::Acceleration::Auto, raycaster::gpu::Acceleration::Bins, raycaster::gpu::Acceleration::Hierarchy];
+
+/// Copies the files of the course's `folder` (`a2`, `a3`, …) into `to`, where its
+/// `commands.txt` lines run as the course runs them.
+pub fn copy_course_folder(corpus: &std::path::Path, folder: &str, to: &std::path::Path) {
+    for entry in std::fs::read_dir(corpus.join(folder)).expect("the course's folder is readable") {
+        let path = entry.unwrap().path();
+        if path.is_file() {
+            std::fs::copy(&path, to.join(path.file_name().unwrap())).unwrap();
+        }
+    }
+}
+
+/// The command lines of the course's `folder/commands.txt`, split at spaces.
+pub fn course_commands(corpus: &std::path::Path, folder: &str) -> Vec<Vec<String>> {
+    let text = std::fs::read_to_string(corpus.join(folder).join("commands.txt")).unwrap();
+    text.lines().filter(|l| !l.trim().is_empty()).map(|l| l.split_whitespace().map(String::from).collect()).collect()
+}

@@ -39,7 +39,7 @@ pub fn check_scene(scene: &Scene, width: u32, height: u32) -> Result<Tally, Stri
             let t_min = 1e-6 * surface.point.abs().max_element().max(1.0);
             let onwards = Ray::new(surface.point, primary.direction, t_min);
             check_ray(&prepared, &onwards, &mut tally)?;
-            for light in &scene.lights {
+            for light in scene.lights.iter().filter_map(|l| l.directional()) {
                 check_ray(&prepared, &Ray::new(surface.point, -light.direction, t_min), &mut tally)?;
             }
         }
