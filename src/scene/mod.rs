@@ -7,6 +7,7 @@
 mod error;
 pub mod generate;
 mod lexer;
+mod measure;
 pub mod model;
 mod obj;
 mod parser;

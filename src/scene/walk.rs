@@ -2,7 +2,7 @@
 //! transform that the Groups and Transforms above it add up to.
 //!
 //! Each stage that needs the scene's primitives in world space (the GPU's flattening, its
-//! precision check, the model's bounds and counts, a split render's scene hash) visits them
+//! precision check, the scene's bounds and counts (`measure`), a split render's scene hash) visits them
 //! through here, so the order of the matrix products, and so every rounding, is the same for
 //! all of them. (The CPU reference keeps its own walk on purpose: it carries the ray through
 //! each Transform in turn, as docs/SPEC.md §4 says, and must stay independent.)
