@@ -80,6 +80,23 @@ impl FromIterator<Output> for Outputs {
     }
 }
 
+/// How hits are shaded (docs/SPEC.md §5): the flags that change only the colour image.
+/// [`Default`] is the course's assignment 2: back faces black, local shading only.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Shading {
+    /// Shade back-facing hits as if they faced the viewer (`-shade_back`).
+    pub shade_back: bool,
+    /// The handout's optional specular fix (`--specular-fix`): the specular term is
+    /// multiplied by N·L rather than cut to zero where N·L < 0.
+    pub specular_fix: bool,
+    /// `-shadows`: a shadow ray to every light that faces the hit.
+    pub shadows: bool,
+    /// `-bounces N`: how deep reflected and refracted rays go (0: local shading only).
+    pub bounces: u32,
+    /// `-weight W`: no secondary ray whose weight falls below W.
+    pub weight: f64,
+}
+
 /// Which images to produce and how (docs/SPEC.md §1).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RenderOptions {
@@ -87,17 +104,8 @@ pub struct RenderOptions {
     pub height: u32,
     /// The images to compute; the frame's other buffers stay empty.
     pub outputs: Outputs,
-    /// Shade back-facing hits as if they faced the viewer (`-shade_back`).
-    pub shade_back: bool,
-    /// The handout's optional specular fix (`--specular-fix`): the specular term is
-    /// multiplied by N·L rather than cut to zero where N·L < 0 (docs/SPEC.md §5).
-    pub specular_fix: bool,
-    /// `-shadows`: a shadow ray to every light that faces the hit (docs/SPEC.md §5).
-    pub shadows: bool,
-    /// `-bounces N`: how deep reflected and refracted rays go (0: local shading only).
-    pub bounces: u32,
-    /// `-weight W`: no secondary ray whose weight falls below W.
-    pub weight: f64,
+    /// How hits are shaded.
+    pub shading: Shading,
     /// The GPU kernel's ray/triangle algorithm (the reference always uses its f64 Cramer's rule).
     pub triangle_test: TriangleTest,
     /// The GPU kernel's ray/sphere algorithm (the reference always uses its f64 quadratic).
@@ -157,11 +165,7 @@ impl RenderOptions {
             width,
             height,
             outputs: Outputs::ALL,
-            shade_back: false,
-            specular_fix: false,
-            shadows: false,
-            bounces: 0,
-            weight: 0.0,
+            shading: Shading::default(),
             triangle_test: TriangleTest::default(),
             sphere_test: SphereTest::default(),
         }

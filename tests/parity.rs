@@ -7,7 +7,7 @@ mod common;
 use common::{corpus, scenes_dir};
 use raycaster::gpu::GpuError;
 use raycaster::metrics::compare_frames;
-use raycaster::render::RenderOptions;
+use raycaster::render::{RenderOptions, Shading};
 use raycaster::scene::load_scene;
 use std::path::{Path, PathBuf};
 
@@ -62,7 +62,10 @@ fn parity(files: &[PathBuf]) -> Vec<String> {
             continue;
         }
         for shade_back in [false, true] {
-            let options = RenderOptions { shade_back, ..RenderOptions::all(width, height) };
+            let options = RenderOptions {
+                shading: Shading { shade_back, ..Shading::default() },
+                ..RenderOptions::all(width, height)
+            };
             let reference = raycaster::cpu::render(&scene, &options);
             for (acceleration, gpu) in &renderers {
                 let ours = gpu.render(&scene, &options).unwrap();

@@ -26,7 +26,7 @@ use proptest::prelude::*;
 use proptest::test_runner::{Config, FileFailurePersistence, RngAlgorithm, TestError, TestRng, TestRunner};
 use raycaster::gpu::GpuRenderer;
 use raycaster::metrics::{compare_frames, depth_range_of};
-use raycaster::render::RenderOptions;
+use raycaster::render::{RenderOptions, Shading};
 use raycaster::scene::{generate, load_scene, Scene};
 use std::cell::RefCell;
 use std::fmt::Write as _;
@@ -466,7 +466,10 @@ fn check(gpu: &GpuRenderer, spec: &SceneSpec, totals: &RefCell<Totals>) -> Resul
     let reproduce = || reproduction(spec, &files);
     let (_dir, scene) = load(spec, &files)?;
 
-    let options = RenderOptions { shade_back: spec.shade_back, ..RenderOptions::all(spec.width, spec.height) };
+    let options = RenderOptions {
+        shading: Shading { shade_back: spec.shade_back, ..Shading::default() },
+        ..RenderOptions::all(spec.width, spec.height)
+    };
     let start = Instant::now();
     let reference = raycaster::cpu::render(&scene, &options);
     let reference_seconds = start.elapsed().as_secs_f64();

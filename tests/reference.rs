@@ -5,7 +5,7 @@ mod common;
 
 use glam::DVec3;
 use raycaster::camera::{PrimaryRays, Ray};
-use raycaster::render::RenderOptions;
+use raycaster::render::{RenderOptions, Shading};
 use raycaster::scene::{parse_scene, Scene};
 use std::path::Path;
 
@@ -109,7 +109,7 @@ fn back_faces_black_unless_shade_back() {
     );
     let mut options = RenderOptions::all(1, 1);
     assert_eq!(raycaster::cpu::render(&s, &options).color[0], [0.0, 0.0, 0.0]);
-    options.shade_back = true;
+    options.shading.shade_back = true;
     // Flipped normal (0,0,1) against L = (0,0,1): full light.
     assert_eq!(raycaster::cpu::render(&s, &options).color[0], [1.0, 0.5, 0.25]);
 }
@@ -296,7 +296,10 @@ fn specular_term_at_the_pole() {
     let light = DVec3::new(1.0, 0.8, 1.0);
     let (diffuse, specular) = (DVec3::splat(0.2), DVec3::new(0.5, 0.25, 0.0));
     for fix in [false, true] {
-        let options = RenderOptions { specular_fix: fix, ..RenderOptions::all(101, 101) };
+        let options = RenderOptions {
+            shading: Shading { specular_fix: fix, ..Shading::default() },
+            ..RenderOptions::all(101, 101)
+        };
         let frame = raycaster::cpu::render(&s, &options);
         let weight = if fix { lobe * cos_light } else { lobe };
         let expected = cos_light * light * diffuse + weight * light * specular;
@@ -316,7 +319,10 @@ fn specular_term_at_the_pole() {
 fn no_specular_from_behind_the_surface() {
     let s = scene(&SPECULAR_POLE.replace("direction 0 -1 -1", "direction 0 -1 0.2"));
     for fix in [false, true] {
-        let options = RenderOptions { specular_fix: fix, ..RenderOptions::all(101, 101) };
+        let options = RenderOptions {
+            shading: Shading { specular_fix: fix, ..Shading::default() },
+            ..RenderOptions::all(101, 101)
+        };
         assert_eq!(raycaster::cpu::render(&s, &options).color[50 * 101 + 50], [0.0, 0.0, 0.0], "fix {fix}");
     }
 }
@@ -373,7 +379,7 @@ Group { numObjects 1 MaterialIndex 0 Plane { normal 0 0 1 offset 0 } }
 }
 
 fn with(options: RenderOptions, shadows: bool, bounces: u32, weight: f64) -> RenderOptions {
-    RenderOptions { shadows, bounces, weight, ..options }
+    RenderOptions { shading: Shading { shadows, bounces, weight, ..options.shading }, ..options }
 }
 
 /// A unit sphere at z = 2 between a plane z = 0 and the light. Straight below it the plane
@@ -474,7 +480,8 @@ fn refraction_through_a_sphere_carries_the_index() {
          Materials { numMaterials 1 PhongMaterial { diffuseColor 0 0 0 transparentColor 1 1 1 indexOfRefraction 1.5 } }
          Group { numObjects 1 MaterialIndex 0 Sphere { center 0 0 0 radius 1 } }",
     );
-    let options = RenderOptions { shade_back: true, ..RenderOptions::all(1, 1) };
+    let options =
+        RenderOptions { shading: Shading { shade_back: true, ..Shading::default() }, ..RenderOptions::all(1, 1) };
     assert_eq!(raycaster::cpu::render(&s, &with(options, false, 1, 0.0)).color[0], [0.0, 0.0, 0.0]);
     assert_eq!(raycaster::cpu::render(&s, &with(options, false, 2, 0.0)).color[0], [0.2, 0.4, 0.8]);
 }

@@ -2,7 +2,7 @@
 //! the rest of the command reads. A leaf: it imports nothing of the app's, so every other
 //! module can depend on it.
 
-use raycaster::render::{Output, Outputs, SphereTest, TriangleTest};
+use raycaster::render::{Output, Outputs, Shading, SphereTest, TriangleTest};
 use std::fmt;
 use std::path::{Path, PathBuf};
 
@@ -74,13 +74,8 @@ pub struct RenderArgs {
     pub width: u32,
     pub height: u32,
     pub files: OutputPaths,
-    pub shade_back: bool,
-    /// `--specular-fix` (docs/SPEC.md §5).
-    pub specular_fix: bool,
-    /// `-shadows`, `-bounces N`, `-weight W` (docs/SPEC.md §5).
-    pub shadows: bool,
-    pub bounces: u32,
-    pub weight: f64,
+    /// `-shade_back`, `--specular-fix`, `-shadows`, `-bounces N`, `-weight W`.
+    pub shading: Shading,
     /// `-gui` was given: with no image flag, the line renders nothing.
     pub gui: bool,
     /// `-gui`, `-tessellation` or `-gouraud` was given: they shape only the course's

@@ -136,11 +136,7 @@ fn render_or_compare(verb: Verb, given: Given) -> Result<Command, UsageError> {
         width,
         height,
         files: given.files,
-        shade_back: given.shade_back,
-        specular_fix: given.specular_fix,
-        shadows: given.shadows,
-        bounces: given.bounces,
-        weight: given.weight,
+        shading: given.shading,
         gui: given.gui,
         preview: given.gui || given.preview,
         backend: given.backend.unwrap_or_default(),
@@ -390,7 +386,7 @@ mod tests {
         assert_eq!(args.files.color, Some(PathBuf::from("o.tga")));
         assert_eq!(args.files.normals, Some(PathBuf::from("n.tga")));
         assert_eq!(args.files.depth, Some(DepthArgs { min: 9.0, max: 11.0, path: "d.tga".into() }));
-        assert!(args.shade_back);
+        assert!(args.shading.shade_back);
         assert_eq!(args.backend, BackendChoice::Auto);
     }
 

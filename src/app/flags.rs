@@ -4,7 +4,7 @@
 //! this table, so a flag is added, renamed or documented in one place.
 
 use crate::app::args::{BackendChoice, DepthArgs, OutputPaths, Split, UsageError, Verbosity, MAX_THREADS};
-use raycaster::render::{Outputs, SphereTest, TriangleTest};
+use raycaster::render::{Outputs, Shading, SphereTest, TriangleTest};
 use std::path::PathBuf;
 
 /// What a command line is: a render, or one of the commands named by its first word.
@@ -76,11 +76,7 @@ pub struct Given {
     pub input: Option<PathBuf>,
     pub size: Option<(u32, u32)>,
     pub files: OutputPaths,
-    pub shade_back: bool,
-    pub specular_fix: bool,
-    pub shadows: bool,
-    pub bounces: u32,
-    pub weight: f64,
+    pub shading: Shading,
     /// `-gui`: the course's OpenGL window, which we do not open.
     pub gui: bool,
     /// `-tessellation θ φ` or `-gouraud`: how that window draws spheres.
@@ -210,18 +206,23 @@ pub static FLAGS: &[Flag] = &[
              .exr: the distance t itself, +inf where nothing is hit; MIN and\n\
              MAX are then not used)",
         ),
-    Flag::course("shade_back", "", Takes::Switch(|g| g.shade_back = true), RENDER_VERBS)
+    Flag::course("shade_back", "", Takes::Switch(|g| g.shading.shade_back = true), RENDER_VERBS)
         .help("shade back-facing hits as if they faced the viewer"),
-    Flag::course("shadows", "", Takes::Switch(|g| g.shadows = true), RENDER_VERBS)
+    Flag::course("shadows", "", Takes::Switch(|g| g.shading.shadows = true), RENDER_VERBS)
         .help("cast a shadow ray to every light (the reference only)"),
     Flag::course(
         "bounces",
         "N",
-        Takes::Number { what: "a number of bounces", min: 0, max: MAX_BOUNCES, set: |g, n| g.bounces = n as u32 },
+        Takes::Number {
+            what: "a number of bounces",
+            min: 0,
+            max: MAX_BOUNCES,
+            set: |g, n| g.shading.bounces = n as u32,
+        },
         RENDER_VERBS,
     )
     .help("reflected and refracted rays, at most N deep (default 0: local\nshading only)"),
-    Flag::course("weight", "W", Takes::Real { what: "a ray weight", set: |g, w| g.weight = w }, RENDER_VERBS)
+    Flag::course("weight", "W", Takes::Real { what: "a ray weight", set: |g, w| g.shading.weight = w }, RENDER_VERBS)
         .help("no secondary ray whose weight falls below W (default 0)"),
     Flag::course("gui", "", Takes::Switch(|g| g.gui = true), RENDER_VERBS)
         .help("the course's OpenGL preview: accepted, no window is opened"),
@@ -229,7 +230,7 @@ pub static FLAGS: &[Flag] = &[
         .help("sphere facets of the OpenGL preview: accepted, ignored"),
     Flag::course("gouraud", "", Takes::Switch(|g| g.preview = true), RENDER_VERBS)
         .help("smooth spheres in the OpenGL preview: accepted, ignored"),
-    Flag::ours("specular_fix", "", Takes::Switch(|g| g.specular_fix = true), RENDER_VERBS).help(
+    Flag::ours("specular_fix", "", Takes::Switch(|g| g.shading.specular_fix = true), RENDER_VERBS).help(
         "the handout's optional specular fix: the specular term times\n\
          N·L (the reference only)",
     ),

@@ -35,11 +35,7 @@ pub fn options_for(args: &RenderArgs) -> RenderOptions {
         width: args.width,
         height: args.height,
         outputs: args.files.outputs(),
-        shade_back: args.shade_back,
-        specular_fix: args.specular_fix,
-        shadows: args.shadows,
-        bounces: args.bounces,
-        weight: args.weight,
+        shading: args.shading,
         triangle_test: args.triangle_test,
         sphere_test: args.sphere_test,
     }
@@ -194,16 +190,19 @@ pub fn render_scene(
 /// tests, so the kernel's variants count only on the GPU; the GPU and the reference differ
 /// in the last bits, so the backend counts.
 fn flags_text(args: &RenderArgs, backend: &Backend) -> String {
+    let shading = &args.shading;
     let mut shade_back = String::new();
-    for (given, flag) in
-        [(args.shade_back, " -shade_back"), (args.specular_fix, " --specular-fix"), (args.shadows, " -shadows")]
-    {
+    for (given, flag) in [
+        (shading.shade_back, " -shade_back"),
+        (shading.specular_fix, " --specular-fix"),
+        (shading.shadows, " -shadows"),
+    ] {
         if given {
             shade_back += flag;
         }
     }
-    if args.bounces > 0 {
-        shade_back += &format!(" -bounces {} -weight {}", args.bounces, args.weight);
+    if shading.bounces > 0 {
+        shade_back += &format!(" -bounces {} -weight {}", shading.bounces, shading.weight);
     }
     match backend {
         Backend::Gpu(..) => format!(

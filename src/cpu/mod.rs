@@ -115,7 +115,7 @@ impl<'a> Reference<'a> {
         let entering = ray.direction.dot(surface.normal) < 0.0;
         let mut normal = surface.normal;
         if ray.direction.dot(normal) > 0.0 {
-            if !self.options.shade_back {
+            if !self.options.shading.shade_back {
                 return DVec3::ZERO;
             }
             normal = -normal;
@@ -137,7 +137,7 @@ impl<'a> Reference<'a> {
                 }
             };
             // A light behind the surface adds nothing (§5), so it needs no shadow ray.
-            if self.options.shadows && to_light.dot(normal) > 0.0 {
+            if self.options.shading.shadows && to_light.dot(normal) > 0.0 {
                 let origin = surface.point + offset_along(normal, surface.point);
                 let mut shadow = Ray::new(origin, to_light, 0.0);
                 if let Light::Point(light) = light {
@@ -147,14 +147,14 @@ impl<'a> Reference<'a> {
                     continue;
                 }
             }
-            color += local(material, normal, to_light, light_color, -ray.direction, self.options.specular_fix);
+            color += local(material, normal, to_light, light_color, -ray.direction, self.options.shading.specular_fix);
         }
-        if path.bounces >= self.options.bounces {
+        if path.bounces >= self.options.shading.bounces {
             return color;
         }
         let spawn = |direction: DVec3, side: DVec3, weight: DVec3, index: f64| -> DVec3 {
             let path = Path { bounces: path.bounces + 1, weight: path.weight * weight.length(), index };
-            if weight == DVec3::ZERO || path.weight < self.options.weight {
+            if weight == DVec3::ZERO || path.weight < self.options.shading.weight {
                 return DVec3::ZERO;
             }
             let origin = surface.point + offset_along(side, surface.point);

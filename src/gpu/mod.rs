@@ -141,7 +141,7 @@ impl KernelConfig {
             orthographic: buffers.orthographic,
             pixel_layout,
             num_lights: buffers.lights.len() as u32,
-            shade_back: options.shade_back,
+            shade_back: options.shading.shade_back,
             triangle_test: options.triangle_test,
             sphere_test: options.sphere_test,
             use_bvh: buffers.bvh.is_some(),

@@ -44,7 +44,7 @@ impl std::error::Error for UnsupportedError {}
 pub fn check(scene: &Scene, options: &RenderOptions) -> Result<(), UnsupportedError> {
     let refuse =
         |location: Option<Location>, what: String| UnsupportedError { file: scene.path.clone(), location, what };
-    if options.shadows && !scene.lights.is_empty() {
+    if options.shading.shadows && !scene.lights.is_empty() {
         return Err(refuse(None, "-shadows (shadow rays)".into()));
     }
     if let Some(Light::Point(light)) = scene.lights.iter().find(|l| matches!(l, Light::Point(_))) {
