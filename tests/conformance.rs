@@ -5,12 +5,7 @@
 
 mod common;
 
-use common::{copy_course_folder, corpus, course_commands};
-use raycaster::metrics::image_diff;
-use std::process::Command;
-
-/// The largest share of pixels off by more than one level, per image and backend.
-const MAX_OFF_FRACTION: f64 = 0.001;
+use common::{against_sample, copy_course_folder, corpus, course_commands, run_course_line};
 
 /// The image files a command line writes (the value after -output/-normals, the third after -depth).
 fn outputs_of(command: &[String]) -> Vec<String> {
@@ -38,22 +33,11 @@ fn conformance(backend: &str) {
     let mut images = 0;
     println!("backend {backend}: pixels off by more than 1 level (of 40000), per course image");
     for command in &commands {
-        let status = Command::new(env!("CARGO_BIN_EXE_raycaster"))
-            .args(command)
-            .args(["--backend", backend])
-            .current_dir(dir.path())
-            .status()
-            .unwrap();
-        assert!(status.success(), "{} failed: {status}", command.join(" "));
+        run_course_line(dir.path(), command, backend);
         for output in outputs_of(command) {
-            let ours = raycaster::image_io::read_image(&dir.path().join(&output)).unwrap();
             let stem = output.trim_end_matches(".tga");
-            let expected = raycaster::image_io::read_image(&corpus.join(format!("a2/expected/{stem}.png"))).unwrap();
-            let diff = image_diff(&ours, &expected);
-            println!("  {stem:<22} {:>5}   (max diff {})", diff.off_by_more_than_one, diff.max);
-            if diff.off_by_more_than_one as f64 > MAX_OFF_FRACTION * diff.pixels as f64 {
-                failures.push(format!("{stem}: {} pixels off", diff.off_by_more_than_one));
-            }
+            let sample = corpus.join(format!("a2/expected/{stem}.png"));
+            failures.extend(against_sample(&dir.path().join(&output), &sample, stem));
             images += 1;
         }
     }

@@ -10,13 +10,8 @@
 
 mod common;
 
-use common::{copy_course_folder, corpus, course_commands};
-use raycaster::metrics::image_diff;
+use common::{against_sample, copy_course_folder, corpus, course_commands, run_course_line};
 use std::path::Path;
-use std::process::Command;
-
-/// The largest share of pixels off by more than one level, per image.
-const MAX_OFF_FRACTION: f64 = 0.001;
 
 /// The scenes whose handout shows the specular fix, and the sample it shows.
 const FIXED: [(&str, &str); 3] = [
@@ -33,22 +28,9 @@ fn value_after(command: &[String], flag: &str) -> String {
 /// Runs `command` in `dir` on the reference and compares its `-output` with the sample
 /// `expected`; returns the failure, if any.
 fn run_and_compare(corpus: &Path, dir: &Path, command: &[String], expected: &str) -> Option<String> {
-    let output = Command::new(env!("CARGO_BIN_EXE_raycaster"))
-        .args(command)
-        .args(["--backend", "cpu"])
-        .current_dir(dir)
-        .output()
-        .unwrap();
-    assert!(output.status.success(), "{} failed: {}", command.join(" "), String::from_utf8_lossy(&output.stderr));
-    let ours = raycaster::image_io::read_image(&dir.join(value_after(command, "-output"))).unwrap();
-    let sample = raycaster::image_io::read_image(&corpus.join(format!("a3/expected/{expected}.png"))).unwrap();
-    let diff = image_diff(&ours, &sample);
-    println!(
-        "  {expected:<16} {:>5} of {} pixels off by more than 1 level  (max diff {})",
-        diff.off_by_more_than_one, diff.pixels, diff.max
-    );
-    (diff.off_by_more_than_one as f64 > MAX_OFF_FRACTION * diff.pixels as f64)
-        .then(|| format!("{expected}: {} of {} pixels off", diff.off_by_more_than_one, diff.pixels))
+    run_course_line(dir, command, "cpu");
+    let sample = corpus.join(format!("a3/expected/{expected}.png"));
+    against_sample(&dir.join(value_after(command, "-output")), &sample, expected)
 }
 
 #[test]

@@ -8,11 +8,7 @@
 
 mod common;
 
-use common::{copy_course_folder, corpus, course_commands};
-use raycaster::metrics::image_diff;
-use std::process::Command;
-
-const MAX_OFF_FRACTION: f64 = 0.001;
+use common::{against_sample, copy_course_folder, corpus, course_commands, run_course_line};
 
 #[test]
 fn course_images_a4_reference() {
@@ -28,23 +24,8 @@ fn course_images_a4_reference() {
         if !sample.exists() {
             continue;
         }
-        let output = Command::new(env!("CARGO_BIN_EXE_raycaster"))
-            .args(&command)
-            .args(["--backend", "cpu"])
-            .current_dir(dir.path())
-            .output()
-            .unwrap();
-        assert!(output.status.success(), "{}: {}", command.join(" "), String::from_utf8_lossy(&output.stderr));
-        let ours = raycaster::image_io::read_image(&dir.path().join(&command[k + 1])).unwrap();
-        let expected = raycaster::image_io::read_image(&sample).unwrap();
-        let diff = image_diff(&ours, &expected);
-        println!(
-            "  {stem:<12} {:>5} of {} pixels off by more than 1 level  (max diff {})",
-            diff.off_by_more_than_one, diff.pixels, diff.max
-        );
-        if diff.off_by_more_than_one as f64 > MAX_OFF_FRACTION * diff.pixels as f64 {
-            failures.push(format!("{stem}: {} of {} pixels off", diff.off_by_more_than_one, diff.pixels));
-        }
+        run_course_line(dir.path(), &command, "cpu");
+        failures.extend(against_sample(&dir.path().join(&command[k + 1]), &sample, &stem));
         compared.push(stem);
     }
     assert_eq!(compared, ["output4_04d", "output4_10"], "the course's a4 samples");

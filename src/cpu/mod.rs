@@ -112,9 +112,10 @@ impl<'a> Reference<'a> {
     /// `path` may go deeper; a back-facing hit is black unless `shade_back`, which shades it
     /// with the normal turned towards the viewer.
     fn shade(&self, surface: &Surface, ray: &Ray, path: Path) -> DVec3 {
-        let entering = ray.direction.dot(surface.normal) < 0.0;
+        let facing = ray.direction.dot(surface.normal);
+        let entering = facing < 0.0;
         let mut normal = surface.normal;
-        if ray.direction.dot(normal) > 0.0 {
+        if facing > 0.0 {
             if !self.options.shading.shade_back {
                 return DVec3::ZERO;
             }

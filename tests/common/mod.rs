@@ -82,3 +82,30 @@ pub fn course_commands(corpus: &std::path::Path, folder: &str) -> Vec<Vec<String
     let text = std::fs::read_to_string(corpus.join(folder).join("commands.txt")).unwrap();
     text.lines().filter(|l| !l.trim().is_empty()).map(|l| l.split_whitespace().map(String::from).collect()).collect()
 }
+
+/// The course's images are matched when at most this share of an image's pixels is more
+/// than one level off in some channel.
+pub const MAX_OFF_FRACTION: f64 = 0.001;
+
+/// Runs one of the course's command lines in `dir` with `--backend backend`, failing the
+/// test with the command's stderr when it fails.
+pub fn run_course_line(dir: &std::path::Path, command: &[String], backend: &str) {
+    let output = std::process::Command::new(env!("CARGO_BIN_EXE_raycaster"))
+        .args(command)
+        .args(["--backend", backend])
+        .current_dir(dir)
+        .output()
+        .unwrap();
+    assert!(output.status.success(), "{}: {}", command.join(" "), String::from_utf8_lossy(&output.stderr));
+}
+
+/// Our image `ours` against the course's `sample`: prints a line for `name`, and returns
+/// the failure when more than [`MAX_OFF_FRACTION`] of its pixels are more than 1 level off.
+pub fn against_sample(ours: &std::path::Path, sample: &std::path::Path, name: &str) -> Option<String> {
+    let ours = raycaster::image_io::read_image(ours).unwrap();
+    let sample = raycaster::image_io::read_image(sample).unwrap();
+    let diff = raycaster::metrics::image_diff(&ours, &sample);
+    let off = format!("{} of {} pixels off by more than 1 level", diff.off_by_more_than_one, diff.pixels);
+    println!("  {name:<22} {off}  (max diff {})", diff.max);
+    (diff.off_by_more_than_one as f64 > MAX_OFF_FRACTION * diff.pixels as f64).then(|| format!("{name}: {off}"))
+}
