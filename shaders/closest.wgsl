@@ -73,9 +73,9 @@ fn closest_plane(ray: Ray, tmin: f32) -> Closest {
     return best;
 }
 
-// The closest hit without bins: through the hierarchy, or flat loops over each kind.
-fn closest_hit(ray: Ray) -> Closest {
-    let tmin = t_min();
+// The closest hit above tmin without bins: through the hierarchy, or flat loops over each
+// kind.
+fn closest_hit(ray: Ray, tmin: f32) -> Closest {
     var best = closest_plane(ray, tmin);
     // Only the watertight test reads the shear; otherwise the compiler drops it.
     let shear = shear_for(ray.direction);

@@ -6,22 +6,35 @@
 // only what the chosen one reaches, and lavapipe would otherwise compile the other's code
 // before dropping it. (The host's gpu::KernelConfig::packet and entry_point.)
 
-// Shades and writes tile-local row `row` of column i, when it belongs to this tile.
+// Whether the driver's loop limit was reached (docs/lavapipe.md): lavapipe counts the
+// iterations of all of an invocation's loops together and, past its limit, lets each loop
+// run one pass and no more. A loop of LOOP_CANARY_TRIPS = 2 passes (a count the compiler
+// cannot see) then runs once.
+fn loops_were_cut() -> bool {
+    var passes = 0u;
+    for (var k = 0u; k < P.loop_canary_trips; k++) {
+        passes += 1u;
+    }
+    return passes != P.loop_canary_trips;
+}
+
+// Shades and writes tile-local row `row` of column i, when it belongs to this tile; with
+// LOOP_CANARY, marked when its loops were cut short, for the host to render it again.
 fn finish_pixel(i: u32, row: i32, ray: Ray, hit: Closest) {
     if (row < 0 || row >= i32(P.tile_rows)) {
         return;
     }
     let index = u32(row) * P.width + i;
     if (hit.t == NO_HIT) {
-        write_pixel(index, false, P.background, vec3<f32>(0.0), 0.0);
+        write_pixel(index, false, P.background, vec3<f32>(0.0), 0.0, LOOP_CANARY && loops_were_cut());
         return;
     }
     let surface = surface_at(hit, ray);
     var color = vec3<f32>(0.0);
     if (WANT_COLOR) {
-        color = shade(surface, ray);
+        color = color_of_tree(surface, ray);
     }
-    write_pixel(index, true, color, surface.normal, hit.t);
+    write_pixel(index, true, color, surface.normal, hit.t, LOOP_CANARY && loops_were_cut());
 }
 
 @compute @workgroup_size(WORKGROUP, WORKGROUP)
@@ -33,7 +46,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let ray = ray_of_row(i, P.first_row + row);
-    finish_pixel(i, i32(row), ray, closest_hit(ray));
+    finish_pixel(i, i32(row), ray, closest_hit(ray, t_min()));
 }
 
 // Image rows base + PACKET·y … + PACKET − 1, where base is the tile's first row rounded

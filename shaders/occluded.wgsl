@@ -1,6 +1,5 @@
 // The any-hit query, for shadow rays: whether anything lies between a point and a light.
-// No entry point calls it yet, so no pipeline compiles it (wgpu translates only what the
-// chosen entry point reaches); tests/layout.rs validates it with the rest.
+// A kernel without SHADOWS never calls it, so its pipeline does not compile it.
 
 // Whether the ray meets anything at some t in (tmin, tmax), returning at the first hit
 // found. Each primitive is tested as the closest-hit search tests it, with tmax as the

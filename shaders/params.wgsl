@@ -29,6 +29,23 @@ override PACKED_8BIT: bool = false;
 // loop unrolled for the rest.
 override NUM_LIGHTS: u32 = 0u;
 override SHADE_BACK: bool = false;
+// The course's assignments 3 and 4 (docs/SPEC.md §5), each compiled in only where a scene or
+// a flag uses it, so that a scene using none of them gets assignment 2's kernel: some
+// material has a specular colour; --specular-fix; some light is a PointLight; -shadows in a
+// scene with lights.
+override SPECULAR: bool = false;
+override SPECULAR_FIX: bool = false;
+override POINT_LIGHTS: bool = false;
+override SHADOWS: bool = false;
+// The ray tree (shaders/tree.wgsl): reflected and refracted rays at most BOUNCES deep (the
+// host's -bounces, lowered to the depth the materials' weights can reach, below
+// TREE_STACK), none whose weight falls below WEIGHT (-weight).
+override BOUNCES: u32 = 0u;
+override WEIGHT: f32 = 0.0;
+// Whether to check, after each pixel, that the driver did not cut its loops short
+// (loops_were_cut in shaders/entry.wgsl): on drivers with a loop limit, where a ray tree
+// could reach it.
+override LOOP_CANARY: bool = false;
 // Which intersection algorithms to compile (the course asks for methods compared), one of
 // the TRIANGLE_* and SPHERE_* values below (the host's render::TriangleTest, SphereTest).
 override TRIANGLE_TEST: u32 = 2u;
@@ -69,6 +86,12 @@ struct Params {
     num_ellipsoids: u32,
     num_planes: u32,
     num_triangles: u32,
+    // gpu::layout::LOOP_CANARY_TRIPS (2), from the buffer so that no compiler unrolls the
+    // canary loop.
+    loop_canary_trips: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 }
 
 // A sphere in world space (a similarity transform was baked into it).
@@ -131,8 +154,7 @@ struct BinItem {
 }
 
 // The course's PhongMaterial (scene::Material). A vec3 and a scalar share each 16 bytes,
-// so the host's twin (gpu::layout::GpuMaterial) needs no hidden padding. Shading reads
-// only `diffuse` until Phong shading and the ray tree arrive.
+// so the host's twin (gpu::layout::GpuMaterial) needs no hidden padding.
 struct Material {
     diffuse: vec3<f32>,
     exponent: f32,
@@ -144,11 +166,16 @@ struct Material {
     _pad1: u32,
 }
 
+// A DirectionalLight or a PointLight (is_point), as gpu::layout::GpuLight.
 struct Light {
-    // −normalise(direction): from the surface toward the light.
-    to_light: vec3<f32>,
-    _pad0: u32,
+    // Directional: −normalise(direction), from the surface toward the light. Point: the
+    // light's camera-relative position.
+    to_light_or_position: vec3<f32>,
+    is_point: u32,
     color: vec3<f32>,
+    _pad0: u32,
+    // A point light's colour is divided by a0 + a1·d + a2·d² at distance d.
+    attenuation: vec3<f32>,
     _pad1: u32,
 }
 

@@ -1,20 +1,96 @@
-// Colour at a surface (docs/SPEC.md §5).
+// Colour at a surface, lit directly (docs/SPEC.md §5): ambient, then per light Lambert's
+// cosine law and the Blinn–Torrance specular lobe, each light first asked, with -shadows,
+// whether anything blocks it.
 
-// Ambient plus Lambert per directional light; a back-facing hit is black unless SHADE_BACK,
-// which shades it with the flipped normal, as the course's -shade_back does.
-fn shade(surface: Surface, ray: Ray) -> vec3<f32> {
-    var n = surface.normal;
-    if (dot(ray.direction, n) > 0.0) {
-        if (!SHADE_BACK) {
-            return vec3<f32>(0.0);
-        }
-        n = -n;
+// Light arriving at a point: from which direction (unit, toward the light), its colour
+// there, and how far the light is (NO_HIT for a directional light).
+struct Incoming {
+    to_light: vec3<f32>,
+    color: vec3<f32>,
+    distance: f32,
+}
+
+// A point light's colour is divided by a0 + a1·d + a2·d² (the parser keeps the
+// coefficients ≥ 0 and not all 0; at the light itself the divisor is kept from 0, as in the
+// reference).
+fn incoming(light: Light, p: vec3<f32>) -> Incoming {
+    if (POINT_LIGHTS && light.is_point != 0u) {
+        let offset = light.to_light_or_position - p;
+        let d = length(offset);
+        let a = light.attenuation;
+        let divisor = max(a.x + a.y * d + a.z * d * d, 1.17549435e-38);
+        return Incoming(offset / d, light.color / divisor, d);
     }
-    let diffuse = materials[surface.material].diffuse;
-    var color = P.ambient * diffuse;
+    return Incoming(light.to_light_or_position, light.color, NO_HIT);
+}
+
+// x^e for the specular lobe, x ≥ 0: pow is exp2(e·log2(x)) in WGSL, undefined at x = 0.
+fn lobe_power(x: f32, e: f32) -> f32 {
+    if (x <= 0.0) {
+        return select(0.0, 1.0, e == 0.0);
+    }
+    return pow(x, e);
+}
+
+// What a surface with unit normal n (facing the viewer) reflects toward the viewer of the
+// light `light`: max(N·L, 0)·light·diffuse, plus max(N·H, 0)^exponent·light·specular with
+// the half vector H = normalise(L + V), cut where N·L ≤ 0 or, with SPECULAR_FIX,
+// multiplied by N·L (the handout's optional fix; cpu::local).
+fn local(material: Material, n: vec3<f32>, light: Incoming, to_viewer: vec3<f32>) -> vec3<f32> {
+    let cos_light = dot(light.to_light, n);
+    let diffuse = max(cos_light, 0.0) * light.color * material.diffuse;
+    if (!SPECULAR || all(material.specular == vec3<f32>(0.0)) || cos_light <= 0.0) {
+        return diffuse;
+    }
+    let sum = light.to_light + to_viewer;
+    if (all(sum == vec3<f32>(0.0))) {
+        return diffuse;
+    }
+    var lobe = lobe_power(max(dot(n, normalize(sum)), 0.0), material.exponent);
+    if (SPECULAR_FIX) {
+        lobe *= cos_light;
+    }
+    return diffuse + lobe * light.color * material.specular;
+}
+
+// Whether something lies between the surface and `light`, arriving as `arriving`: a
+// shadow ray from the point, moved off the surface on the lit side, up to the light.
+fn in_shadow(surface: Surface, n: vec3<f32>, light: Light, arriving: Incoming) -> bool {
+    let origin = spawn_origin(surface, n, arriving.to_light);
+    var tmax = NO_HIT;
+    if (POINT_LIGHTS && light.is_point != 0u) {
+        tmax = distance(light.to_light_or_position, origin);
+    }
+    return occluded(Ray(origin, arriving.to_light), 0.0, tmax);
+}
+
+// A back face is black unless SHADE_BACK, which shades it with the flipped normal, as the
+// course's -shade_back does.
+fn is_black(surface: Surface, ray: Ray) -> bool {
+    return !SHADE_BACK && dot(ray.direction, surface.normal) > 0.0;
+}
+
+// The normal turned toward the viewer.
+fn facing_normal(surface: Surface, ray: Ray) -> vec3<f32> {
+    return select(surface.normal, -surface.normal, dot(ray.direction, surface.normal) > 0.0);
+}
+
+// Ambient plus each light, seen along `ray` (unit direction).
+fn shade(surface: Surface, ray: Ray) -> vec3<f32> {
+    if (is_black(surface, ray)) {
+        return vec3<f32>(0.0);
+    }
+    let n = facing_normal(surface, ray);
+    let material = materials[surface.material];
+    var color = P.ambient * material.diffuse;
     for (var k = 0u; k < NUM_LIGHTS; k++) {
         let light = lights[k];
-        color += max(dot(light.to_light, n), 0.0) * light.color * diffuse;
+        let arriving = incoming(light, surface.point);
+        // A light behind the surface adds nothing, so it needs no shadow ray.
+        if (SHADOWS && dot(arriving.to_light, n) > 0.0 && in_shadow(surface, n, light, arriving)) {
+            continue;
+        }
+        color += local(material, n, arriving, -ray.direction);
     }
     return color;
 }

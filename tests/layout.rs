@@ -70,6 +70,7 @@ fn host_structs_match_the_shader() {
             ("num_ellipsoids", offset_of!(Params, num_ellipsoids)),
             ("num_planes", offset_of!(Params, num_planes)),
             ("num_triangles", offset_of!(Params, num_triangles)),
+            ("loop_canary_trips", offset_of!(Params, loop_canary_trips)),
         ],
     );
     check(
@@ -131,7 +132,12 @@ fn host_structs_match_the_shader() {
         &m,
         "Light",
         size_of::<GpuLight>(),
-        &[("to_light", offset_of!(GpuLight, to_light)), ("color", offset_of!(GpuLight, color))],
+        &[
+            ("to_light_or_position", offset_of!(GpuLight, to_light_or_position)),
+            ("is_point", offset_of!(GpuLight, is_point)),
+            ("color", offset_of!(GpuLight, color)),
+            ("attenuation", offset_of!(GpuLight, attenuation)),
+        ],
     );
     check(
         &m,
@@ -214,6 +220,13 @@ fn override_constants_match_the_host() {
         pixel_layout: PixelLayout { outputs: Outputs::ALL, packed: false },
         num_lights: 1,
         shade_back: false,
+        specular: true,
+        specular_fix: true,
+        point_lights: true,
+        shadows: true,
+        bounces: 3,
+        weight_bits: 0.01f32.to_bits(),
+        loop_canary: true,
         triangle_test: TriangleTest::Watertight,
         sphere_test: SphereTest::Robust,
         use_bvh: false,

@@ -379,3 +379,58 @@ fn the_command_line_refuses_on_gpu_and_falls_back_on_auto() {
     assert!(cpu.stderr.is_empty());
     assert_eq!(std::fs::read(out("auto.tga")).unwrap(), std::fs::read(out("cpu.tga")).unwrap());
 }
+
+/// Assignments 3 and 4's values: a point light's position (from the camera), attenuation
+/// and colour, and a material's specular, reflective and transparent colours and exponent
+/// need the upper bound; the index of refraction, a ratio, both bounds. Each is refused at
+/// the keyword that wrote it, and accepted just inside.
+#[test]
+fn shading_values_outside_f32_are_refused_where_written() {
+    let scene = |light: &str, material: &str| {
+        format!(
+            "OrthographicCamera {{ center 0 0 5 direction 0 0 -1 up 0 1 0 size 4 }}\n\
+             Lights {{ numLights 1\n  {light} }}\n\
+             Materials {{ numMaterials 1\n    {material} }}\n\
+             Group {{ numObjects 1 MaterialIndex 0 Sphere {{ center 0 0 0 radius 1 }} }}\n"
+        )
+    };
+    let point = |position: f64, attenuation: f64| {
+        format!("PointLight {{ position 0 0 {} color 1 1 1 attenuation 1 0 {} }}", n(position), n(attenuation))
+    };
+    let phong = |exponent: f64, index: f64, reflective: f64| {
+        format!(
+            "PhongMaterial {{ diffuseColor 1 1 1 specularColor 1 1 1 exponent {} reflectiveColor {} 0 0 \
+             transparentColor 0.5 0.5 0.5 indexOfRefraction {} }}",
+            n(exponent),
+            n(reflective),
+            n(index)
+        )
+    };
+    let ok_light = point(10.0, 0.1);
+    let ok_material = phong(20.0, 1.5, 0.5);
+    let cases = [
+        (point(p(28) + 5.0, 0.1), ok_material.clone(), None),
+        (point(p(28) + 5.0 + p(5), 0.1), ok_material.clone(), Some((3, 3, "PointLight 1 position from the camera"))),
+        (point(10.0, p(29)), ok_material.clone(), Some((3, 3, "PointLight 1 attenuation"))),
+        (point(10.0, p(28)), ok_material.clone(), None),
+        (ok_light.clone(), phong(p(29), 1.5, 0.5), Some((5, 5, "Material 0 exponent"))),
+        (ok_light.clone(), phong(20.0, p(-26), 0.5), Some((5, 5, "Material 0 indexOfRefraction"))),
+        (ok_light.clone(), phong(20.0, p(-25), 0.5), None),
+        (ok_light.clone(), phong(20.0, 1.5, p(29)), Some((5, 5, "Material 0 reflectiveColor"))),
+        (ok_light.clone(), ok_material.clone(), None),
+    ];
+    let options = raycaster::render::RenderOptions::all(8, 8);
+    for (light, material, expected) in cases {
+        let text = scene(&light, &material);
+        let parsed = raycaster::scene::parse_scene(&text, Path::new("values.txt")).unwrap();
+        let result = raycaster::gpu::precision::check(&parsed, &options);
+        match (result, expected) {
+            (Ok(()), None) => {}
+            (Err(e), Some((line, col, what))) => {
+                let at = e.location.expect("located");
+                assert_eq!((at.line, at.col, e.what.as_str()), (line, col, what), "{text}");
+            }
+            (result, expected) => panic!("{text}: got {result:?}, expected a refusal of {expected:?}"),
+        }
+    }
+}

@@ -209,7 +209,7 @@ pub static FLAGS: &[Flag] = &[
     Flag::course("shade_back", "", Takes::Switch(|g| g.shading.shade_back = true), RENDER_VERBS)
         .help("shade back-facing hits as if they faced the viewer"),
     Flag::course("shadows", "", Takes::Switch(|g| g.shading.shadows = true), RENDER_VERBS)
-        .help("cast a shadow ray to every light (the reference only)"),
+        .help("cast a shadow ray to every light"),
     Flag::course(
         "bounces",
         "N",
@@ -232,7 +232,7 @@ pub static FLAGS: &[Flag] = &[
         .help("smooth spheres in the OpenGL preview: accepted, ignored"),
     Flag::ours("specular_fix", "", Takes::Switch(|g| g.shading.specular_fix = true), RENDER_VERBS).help(
         "the handout's optional specular fix: the specular term times\n\
-         N·L (the reference only)",
+         N·L",
     ),
     Flag::ours(
         "backend",

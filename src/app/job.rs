@@ -90,6 +90,12 @@ impl Report {
                 time += &format!("; kernel {:.1} ms", ns as f64 / 1e6);
             }
             time += ")";
+            if stats.pixels_cut_short > 0 {
+                lines.push(format!(
+                    "loop limit: the driver cut {} pixels short; the reference rendered them",
+                    stats.pixels_cut_short
+                ));
+            }
         }
         time += &format!(", writing {:.1} ms", self.write_ms);
         lines.push(time);

@@ -139,7 +139,7 @@ impl<'a> Reference<'a> {
             };
             // A light behind the surface adds nothing (§5), so it needs no shadow ray.
             if self.options.shading.shadows && to_light.dot(normal) > 0.0 {
-                let origin = surface.point + offset_along(normal, surface.point);
+                let origin = spawn_origin(surface.point, normal, to_light);
                 let mut shadow = Ray::new(origin, to_light, 0.0);
                 if let Light::Point(light) = light {
                     shadow.t_max = (light.position - origin).length();
@@ -158,7 +158,7 @@ impl<'a> Reference<'a> {
             if weight == DVec3::ZERO || path.weight < self.options.shading.weight {
                 return DVec3::ZERO;
             }
-            let origin = surface.point + offset_along(side, surface.point);
+            let origin = spawn_origin(surface.point, side, direction);
             weight * self.trace(&Ray::new(origin, direction, 0.0), path)
         };
         // Mirror reflection, on the viewer's side of the surface.
@@ -199,8 +199,13 @@ pub fn refract(d: DVec3, n: DVec3, from: f64, into: f64) -> Option<DVec3> {
     (k >= 0.0).then(|| (eta * d + (eta * cos_in - k.sqrt()) * n).normalize())
 }
 
-/// How far a secondary ray starts from the hit point `p`, along the unit normal `side`
-/// (towards the side it leaves on), so that it cannot hit the surface it leaves.
+/// Where a secondary ray leaving the hit point `p` in direction `d` (unit, on the side of
+/// the unit normal `side`) starts (docs/SPEC.md §5): moved along `d` itself until it is
+/// `2⁻³² · max(1, |p|∞)` off the surface, so that it cannot hit the surface it leaves,
+/// while its line stays the exact reflected, refracted or shadow ray (an offset along the
+/// normal would shift the line sideways, by up to the offset, and grazing rays would then
+/// find other hits). The GPU kernel's rule is the same with its own bound
+/// (`spawn_origin` in shaders/surface.wgsl).
 ///
 /// The bound: the reference computes `p` in f64 from the ray and the primitive, and the
 /// error of `p` along the normal is a sum of rounding errors of the magnitudes involved,
@@ -208,10 +213,12 @@ pub fn refract(d: DVec3, n: DVec3, from: f64, into: f64) -> Option<DVec3> {
 /// operation count of the intersection path (a few tens for a primitive, about ten more
 /// per enclosing Transform, up to the parser's 1000 levels: below 2¹⁴ in all). The offset
 /// is 2⁻³² · max(1, |p|∞), over 2⁷ times that bound for any scene whose coordinates are
-/// within 2¹⁴ of the hit point's magnitude, and still 2⁻³² relative: no visible gap.
-fn offset_along(side: DVec3, p: DVec3) -> DVec3 {
+/// within 2¹⁴ of the hit point's magnitude, and still 2⁻³² relative: no visible gap. A ray
+/// leaving at less than 1/1024 to the surface moves 1024 times the offset along itself.
+fn spawn_origin(p: DVec3, side: DVec3, d: DVec3) -> DVec3 {
     const RELATIVE: f64 = 1.0 / 4_294_967_296.0; // 2⁻³²
-    side * RELATIVE * p.abs().max_element().max(1.0)
+    let away = d.dot(side).max(1.0 / 1024.0);
+    p + d * (RELATIVE * p.abs().max_element().max(1.0) / away)
 }
 
 /// docs/SPEC.md §5: what a surface with unit normal `normal` reflects towards `to_viewer`

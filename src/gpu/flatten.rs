@@ -74,27 +74,19 @@ pub struct GpuBvh {
 
 impl SceneBuffers {
     /// Flattens `scene` for the image `rays` describes, with a hierarchy when it has at
-    /// least `bvh_min_primitives` spheres, ellipsoids and triangles.
-    pub fn new(scene: &Scene, rays: &PrimaryRays, options: &GpuOptions) -> SceneBuffers {
+    /// least `bvh_min_primitives` spheres, ellipsoids and triangles. With `secondary_rays`
+    /// (shadow, reflected or refracted rays) no bins, which hold primary rays only: every
+    /// ray then walks the hierarchy.
+    pub fn new(scene: &Scene, rays: &PrimaryRays, options: &GpuOptions, secondary_rays: bool) -> SceneBuffers {
         let mut buffers = SceneBuffers { orthographic: rays.orthographic, ..Default::default() };
         let to_camera = DMat4::from_translation(-rays.center);
         buffers.flatten(&scene.root, &to_camera);
-        buffers.choose_acceleration(rays, options);
+        buffers.choose_acceleration(rays, options, secondary_rays);
         if let Some(bvh) = buffers.bvh.as_ref().filter(|b| b.prim_refs.is_empty()) {
             buffers.triangles = bvh.order.iter().map(|&p| buffers.triangles[p as usize]).collect();
         }
         buffers.materials = scene.materials.iter().map(GpuMaterial::new).collect();
-        buffers.lights = scene
-            .lights
-            .iter()
-            // Point lights never get here: `support::check` refuses them first.
-            .filter_map(|l| l.directional())
-            .map(|l| GpuLight {
-                to_light: f32x3(-l.direction.normalize()),
-                color: f32x3(l.color),
-                ..Default::default()
-            })
-            .collect();
+        buffers.lights = scene.lights.iter().map(|light| GpuLight::new(light, rays.center)).collect();
         buffers.params = Params {
             direction: f32x3(rays.direction),
             horizontal: f32x3(rays.horizontal),
@@ -108,6 +100,7 @@ impl SceneBuffers {
             num_planes: buffers.planes.len() as u32,
             num_triangles: buffers.triangles.len() as u32,
             bin_columns: buffers.bins.as_ref().map_or(0, |b| b.columns),
+            loop_canary_trips: LOOP_CANARY_TRIPS,
             ..Default::default()
         };
         buffers
@@ -125,15 +118,17 @@ impl SceneBuffers {
     }
 
     /// Bins, a hierarchy or flat loops: what `options` asks for, or with
-    /// [`Acceleration::Auto`] the cost model's choice.
-    fn choose_acceleration(&mut self, rays: &PrimaryRays, options: &GpuOptions) {
+    /// [`Acceleration::Auto`] the cost model's choice; with `secondary_rays`, the hierarchy
+    /// where bins were asked for.
+    fn choose_acceleration(&mut self, rays: &PrimaryRays, options: &GpuOptions, secondary_rays: bool) {
         let finite = self.triangles.len() + self.spheres.len() + self.ellipsoids.len();
         let auto = options.acceleration == Acceleration::Auto;
         if finite == 0 || options.acceleration == Acceleration::Flat || (auto && finite < options.bvh_min_primitives) {
             return;
         }
         let pixels = rays.width as u64 * rays.height as u64;
-        if options.acceleration == Acceleration::Bins || (auto && pixels >= BINS_MIN_PIXELS) {
+        let bins_asked = options.acceleration == Acceleration::Bins || (auto && pixels >= BINS_MIN_PIXELS);
+        if bins_asked && !secondary_rays {
             let candidates = binning::candidates(&self.triangles, &self.sphere_bounds, &self.ellipsoid_bounds);
             let forced = options.acceleration == Acceleration::Bins;
             self.bins = Bins::build(rays, &self.triangles, &candidates, |lengths| {
@@ -143,8 +138,7 @@ impl SceneBuffers {
                 return;
             }
         }
-        let min_primitives =
-            if options.acceleration == Acceleration::Hierarchy { 1 } else { options.bvh_min_primitives };
+        let min_primitives = if auto { options.bvh_min_primitives } else { 1 };
         self.bvh = self.build_bvh(min_primitives);
     }
 

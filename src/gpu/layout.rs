@@ -24,7 +24,16 @@ pub struct Params {
     pub num_ellipsoids: u32,
     pub num_planes: u32,
     pub num_triangles: u32,
+    /// [`LOOP_CANARY_TRIPS`], read from the buffer so that the compiler cannot unroll the
+    /// kernel's canary loop.
+    pub loop_canary_trips: u32,
+    pub _pad: [u32; 3],
 }
+
+/// How many times the kernel's canary loop runs (WGSL `loops_were_cut`): twice, unless the
+/// driver's loop limit was reached, after which lavapipe lets every loop run one pass and
+/// no more (docs/lavapipe.md).
+pub const LOOP_CANARY_TRIPS: u32 = 2;
 
 /// WGSL `Sphere`: a sphere in (camera-relative) world space.
 #[repr(C)]
@@ -116,14 +125,36 @@ impl GpuMaterial {
     }
 }
 
-/// WGSL `Light`.
+/// WGSL `Light`: a directional light (`is_point` 0, the unit vector toward the light) or
+/// a point light (`is_point` 1, its camera-relative position and attenuation).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuLight {
-    pub to_light: [f32; 3],
-    pub _pad0: u32,
+    pub to_light_or_position: [f32; 3],
+    pub is_point: u32,
     pub color: [f32; 3],
+    pub _pad0: u32,
+    pub attenuation: [f32; 3],
     pub _pad1: u32,
+}
+
+impl GpuLight {
+    /// `light` for a kernel whose camera sits at `camera` (moved to the origin in f64).
+    pub fn new(light: &crate::scene::Light, camera: glam::DVec3) -> GpuLight {
+        let f = |v: glam::DVec3| v.as_vec3().to_array();
+        match light {
+            crate::scene::Light::Directional(l) => {
+                GpuLight { to_light_or_position: f(-l.direction.normalize()), color: f(l.color), ..Default::default() }
+            }
+            crate::scene::Light::Point(l) => GpuLight {
+                to_light_or_position: f(l.position - camera),
+                is_point: 1,
+                color: f(l.color),
+                attenuation: f(l.attenuation),
+                ..Default::default()
+            },
+        }
+    }
 }
 
 /// What the kernel writes per pixel (WGSL `write_pixel`). As floats: a hit flag word, then
@@ -131,6 +162,10 @@ pub struct GpuLight {
 /// asked for. Packed (`PACKED_8BIT`), for 8-bit images: one word per output asked for, the
 /// colour and `|N|` quantised by the kernel (`r | g << 8 | b << 16`), the depth as the f32
 /// bits of `t` (all ones where nothing was hit), which the host quantises in f64.
+///
+/// A pixel whose loops the driver cut short (`LOOP_CANARY`) is marked: its hit word is
+/// [`CUT_SHORT_HIT`], or its packed colour word has [`CUT_SHORT_BIT`] set. The host renders
+/// it again with the reference ([`PixelLayout::encode`]) before anyone reads it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct PixelLayout {
     pub outputs: Outputs,
@@ -172,6 +207,65 @@ impl PixelLayout {
             pixel
         });
         Frame::from_pixels(&RenderOptions { height: rows, ..*options }, pixels)
+    }
+}
+
+/// The hit word of a float pixel whose loops were cut short.
+pub const CUT_SHORT_HIT: u32 = 2;
+/// The bit of a packed colour word that marks a pixel whose loops were cut short (above the
+/// three bytes of colour).
+pub const CUT_SHORT_BIT: u32 = 1 << 24;
+
+/// What a packed depth word holds where the ray hit nothing (a NaN no kernel computes).
+pub const PACKED_MISS: u32 = u32::MAX;
+
+impl PixelLayout {
+    /// Whether the kernel marked the pixel whose words are `words` as cut short.
+    pub fn cut_short(&self, words: &[u32]) -> bool {
+        if self.packed {
+            self.outputs.contains(Output::Color) && words[0] & CUT_SHORT_BIT != 0
+        } else {
+            words[0] == CUT_SHORT_HIT
+        }
+    }
+
+    /// Writes `pixel` into `words` as the kernel's `write_pixel` does, unmarked.
+    pub fn encode(&self, pixel: &Pixel, words: &mut [u32]) {
+        let mut w = 0;
+        let rgb8 = |c: [f32; 3]| {
+            c.iter().enumerate().fold(0u32, |word, (k, &v)| word | (crate::image_io::quantize(v) as u32) << (8 * k))
+        };
+        if self.packed {
+            if self.outputs.contains(Output::Color) {
+                words[w] = rgb8(pixel.color);
+                w += 1;
+            }
+            if self.outputs.contains(Output::Normals) {
+                words[w] = if pixel.hit { rgb8(pixel.normal.map(f32::abs)) } else { 0 };
+                w += 1;
+            }
+            if self.outputs.contains(Output::Depth) {
+                words[w] = if pixel.hit { pixel.depth.to_bits() } else { PACKED_MISS };
+            }
+            return;
+        }
+        words[w] = pixel.hit as u32;
+        w += 1;
+        let mut put = |values: &[f32]| {
+            for v in values {
+                words[w] = v.to_bits();
+                w += 1;
+            }
+        };
+        if self.outputs.contains(Output::Color) {
+            put(&pixel.color);
+        }
+        if self.outputs.contains(Output::Normals) {
+            put(&pixel.normal);
+        }
+        if self.outputs.contains(Output::Depth) {
+            put(&[pixel.depth]);
+        }
     }
 }
 

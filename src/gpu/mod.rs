@@ -15,6 +15,7 @@ pub mod precision;
 mod prepared;
 pub mod shader;
 pub mod support;
+pub mod tree;
 
 use crate::render::{Frame, Output, RenderOptions, SphereTest, TriangleTest};
 use crate::scene::Scene;
@@ -125,6 +126,19 @@ pub struct KernelConfig {
     pub pixel_layout: PixelLayout,
     pub num_lights: u32,
     pub shade_back: bool,
+    /// Some material has a specular colour.
+    pub specular: bool,
+    pub specular_fix: bool,
+    /// Some light is a point light.
+    pub point_lights: bool,
+    /// Shadow rays (`-shadows` in a scene with lights).
+    pub shadows: bool,
+    /// The ray tree's depth ([`tree::TreeShape::depth`]).
+    pub bounces: u32,
+    /// `-weight`, as the bits of the f32 the kernel compares (so that the key hashes).
+    pub weight_bits: u32,
+    /// Check every pixel for loops the driver cut short ([`GpuRenderer::loop_limit`]).
+    pub loop_canary: bool,
     pub triangle_test: TriangleTest,
     pub sphere_test: SphereTest,
     pub use_bvh: bool,
@@ -132,7 +146,17 @@ pub struct KernelConfig {
 }
 
 impl KernelConfig {
-    pub fn new(buffers: &SceneBuffers, pixel_layout: PixelLayout, options: &RenderOptions) -> KernelConfig {
+    /// The kernel for `buffers`, flattened from a scene whose ray tree is `tree`, on a
+    /// driver with (`loop_limit`) or without a loop limit.
+    pub fn new(
+        buffers: &SceneBuffers,
+        pixel_layout: PixelLayout,
+        options: &RenderOptions,
+        tree: &tree::TreeShape,
+        loop_limit: bool,
+    ) -> KernelConfig {
+        let shading = &options.shading;
+        let specular = buffers.materials.iter().any(|m| m.specular != [0.0; 3]);
         KernelConfig {
             has_spheres: !buffers.spheres.is_empty(),
             has_ellipsoids: !buffers.ellipsoids.is_empty(),
@@ -141,7 +165,18 @@ impl KernelConfig {
             orthographic: buffers.orthographic,
             pixel_layout,
             num_lights: buffers.lights.len() as u32,
-            shade_back: options.shading.shade_back,
+            shade_back: shading.shade_back,
+            specular,
+            specular_fix: specular && shading.specular_fix,
+            point_lights: buffers.lights.iter().any(|l| l.is_point != 0),
+            shadows: shading.shadows && !buffers.lights.is_empty(),
+            bounces: tree.depth,
+            weight_bits: if tree.depth > 0 { (shading.weight as f32).to_bits() } else { 0 },
+            // Only a ray tree or shadow rays multiply a pixel's loops; the rest is left to
+            // the accelerations' own bounds. The tree runs only for the colour image.
+            loop_canary: loop_limit
+                && pixel_layout.outputs.contains(Output::Color)
+                && (tree.depth > 0 || (shading.shadows && !buffers.lights.is_empty())),
             triangle_test: options.triangle_test,
             sphere_test: options.sphere_test,
             use_bvh: buffers.bvh.is_some(),
@@ -168,8 +203,13 @@ impl KernelConfig {
         }
     }
 
+    /// Whether rays other than primary ones are traced (shadow, reflected, refracted).
+    pub fn secondary_rays(&self) -> bool {
+        self.shadows || self.bounces > 0
+    }
+
     /// The values for `PipelineCompilationOptions::constants`.
-    pub fn constants(&self) -> [(&'static str, f64); 16] {
+    pub fn constants(&self) -> [(&'static str, f64); 23] {
         let b = |v: bool| if v { 1.0 } else { 0.0 };
         [
             ("HAS_SPHERES", b(self.has_spheres)),
@@ -184,6 +224,13 @@ impl KernelConfig {
             ("PACKED_8BIT", b(self.pixel_layout.packed)),
             ("NUM_LIGHTS", self.num_lights as f64),
             ("SHADE_BACK", b(self.shade_back)),
+            ("SPECULAR", b(self.specular)),
+            ("SPECULAR_FIX", b(self.specular_fix)),
+            ("POINT_LIGHTS", b(self.point_lights)),
+            ("SHADOWS", b(self.shadows)),
+            ("BOUNCES", self.bounces as f64),
+            ("WEIGHT", f32::from_bits(self.weight_bits) as f64),
+            ("LOOP_CANARY", b(self.loop_canary)),
             ("TRIANGLE_TEST", self.triangle_test as u32 as f64),
             ("SPHERE_TEST", self.sphere_test as u32 as f64),
             ("USE_BVH", b(self.use_bvh)),
@@ -251,6 +298,9 @@ pub struct RenderStats {
     pub tiles: u32,
     /// Time to build the hierarchy or the bins on the CPU, when the scene got one.
     pub acceleration_build_ms: Option<f64>,
+    /// Pixels whose loops the driver cut short ([`GpuRenderer::loop_limit`]), which the
+    /// reference rendered instead.
+    pub pixels_cut_short: u64,
     /// Time to flatten the scene into buffers (BVH build included) and upload them.
     pub prepare_ms: f64,
     /// Bytes of scene data uploaded (primitives, materials, lights, hierarchy, bins).
@@ -393,6 +443,15 @@ impl GpuRenderer {
     ) -> Result<RenderStats, E> {
         let prepared = self.prepare(scene, options, false)?;
         prepared.render_band(first, rows, |tile| on_tile(tile.first_row, tile.to_frame()))
+    }
+
+    /// How many loop iterations this adapter's driver lets one invocation run in all:
+    /// lavapipe's compiler ends loops after [`flatten::LOOP_LIMIT`] (docs/lavapipe.md);
+    /// other drivers have no such limit.
+    pub fn loop_limit(&self) -> Option<u32> {
+        let info = &self.adapter_info;
+        let lavapipe = info.driver.contains("llvmpipe") || info.name.contains("llvmpipe");
+        lavapipe.then_some(flatten::LOOP_LIMIT)
     }
 
     fn pipeline(&self, config: KernelConfig) -> wgpu::ComputePipeline {

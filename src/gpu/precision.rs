@@ -40,13 +40,16 @@
 //! `size`, perspective `1/tan(angle/2)`) and, for a sphere under a non-uniform transform,
 //! its centre, its half-extents, the largest entry of the world-to-unit-sphere matrix and
 //! the camera's position in the unit sphere's space (the matrix's entries are about
-//! 1/size, so such a sphere must be between about 2⁻²⁸ and 2²⁵ large). A component far
+//! 1/size, so such a sphere must be between about 2⁻²⁸ and 2²⁵ large), and each
+//! material's index of refraction (a ratio of two bends every refracted ray). A component far
 //! below the largest of its vector is absorbed by rounding in every sum it enters, so its
 //! own underflow does not matter; unit vectors (ray and light directions, plane normals,
 //! the camera basis) are normalised in f64 and always in range. Colours (light, ambient,
-//! diffuse, background) need only the upper bound: a colour product of up to three factors
-//! stays finite, and a colour factor small enough to underflow makes a term far below one
-//! 8-bit level.
+//! diffuse, specular, reflective, transparent, background), a point light's position from
+//! the camera and attenuation, and the specular exponent need only the upper bound: a
+//! colour product of up to three factors stays finite, a colour factor small enough to
+//! underflow makes a term far below one 8-bit level, and a light's distance is a
+//! difference of positions.
 //!
 //! What this does not promise: relative precision. A sphere of radius 1 seen 2²⁸ units
 //! away is within range, but f32 cannot place its surface to better than 2⁴ units; the
@@ -56,7 +59,7 @@
 
 use crate::camera::PrimaryRays;
 use crate::render::RenderOptions;
-use crate::scene::{try_for_each_leaf, Location, Mesh, Object, Scene, Shape};
+use crate::scene::{try_for_each_leaf, Light, Location, Mesh, Object, Scene, Shape};
 use glam::{DMat3, DMat4, DVec3};
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -121,12 +124,33 @@ pub fn check(scene: &Scene, options: &RenderOptions) -> Result<(), PrecisionErro
         checker.scalar(Some(scene.camera.location), what, extent)?;
     }
     for (k, light) in scene.lights.iter().enumerate() {
-        checker.colour(&format!("DirectionalLight {} color", k + 1), light.color())?;
+        match light {
+            Light::Directional(light) => checker.colour(&format!("DirectionalLight {} color", k + 1), light.color)?,
+            Light::Point(light) => {
+                let at = Some(light.location);
+                checker.bounded(at, &format!("PointLight {} color", k + 1), max_norm(light.color))?;
+                // Only its distance to points matters, a difference: no lower bound.
+                let position = max_norm(light.position - scene.camera.center);
+                checker.bounded(at, &format!("PointLight {} position from the camera", k + 1), position)?;
+                checker.bounded(at, &format!("PointLight {} attenuation", k + 1), max_norm(light.attenuation))?;
+            }
+        }
     }
     checker.colour("Background color", scene.background.color)?;
     checker.colour("Background ambientLight", scene.background.ambient)?;
     for (k, material) in scene.materials.iter().enumerate() {
+        let at = scene.material_locations.get(k).copied();
         checker.colour(&format!("Material {} diffuseColor", k), material.diffuse)?;
+        for (name, colour) in [
+            ("specularColor", material.specular),
+            ("reflectiveColor", material.reflective),
+            ("transparentColor", material.transparent),
+        ] {
+            checker.bounded(at, &format!("Material {k} {name}"), max_norm(colour))?;
+        }
+        checker.bounded(at, &format!("Material {k} exponent"), material.exponent.abs())?;
+        // A ratio of indices bends every refracted ray: both ends of the range matter.
+        checker.scalar(at, &format!("Material {k} indexOfRefraction"), material.index_of_refraction)?;
     }
     checker.objects(&scene.root, &DMat4::from_translation(-scene.camera.center))
 }
@@ -167,11 +191,15 @@ impl Checker<'_> {
     }
 
     fn colour(&self, what: &str, colour: DVec3) -> Result<(), PrecisionError> {
-        let magnitude = max_norm(colour);
+        self.bounded(None, what, max_norm(colour))
+    }
+
+    /// A value that needs only the upper bound (see the module's contract).
+    fn bounded(&self, location: Option<Location>, what: &str, magnitude: f64) -> Result<(), PrecisionError> {
         if magnitude <= MAX_MAGNITUDE {
             Ok(())
         } else {
-            Err(self.error(None, what, magnitude))
+            Err(self.error(location, what, magnitude))
         }
     }
 

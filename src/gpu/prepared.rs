@@ -6,7 +6,7 @@
 //! (decoding, quantising, writing files) overlaps the device's instead of following it.
 
 use super::flatten::SceneBuffers;
-use super::layout::{Params, PixelLayout};
+use super::layout::{Params, PixelLayout, PACKED_MISS};
 use super::{GpuError, GpuRenderer, KernelConfig, RenderStats, Timer, BINDINGS, OUTPUT_BINDING, WORKGROUP};
 use crate::render::{row_tiles, Frame, Output, RenderOptions};
 use crate::scene::Scene;
@@ -25,6 +25,9 @@ pub struct PreparedScene<'a> {
     tile_rows: u32,
     slots: Vec<Slot>,
     stats: RenderStats,
+    /// The scene, kept where the kernel may mark pixels its driver cut short
+    /// ([`KernelConfig::loop_canary`]), to render those with the reference.
+    fallback: Option<Scene>,
 }
 
 /// The buffers one tile in flight uses.
@@ -47,9 +50,6 @@ pub struct ReadTile<'a> {
     words: &'a [u32],
 }
 
-/// What a packed depth word holds where the ray hit nothing (a NaN no kernel computes).
-const PACKED_MISS: u32 = u32::MAX;
-
 impl<'a> PreparedScene<'a> {
     pub(super) fn new(
         gpu: &'a GpuRenderer,
@@ -59,10 +59,11 @@ impl<'a> PreparedScene<'a> {
     ) -> Result<PreparedScene<'a>, GpuError> {
         let start = std::time::Instant::now();
         // Refused before any tile is handed out: `auto` then renders with the reference.
-        super::support::check(scene, options).map_err(GpuError::Unsupported)?;
+        let tree = super::support::check(scene, options).map_err(GpuError::Unsupported)?;
         super::precision::check(scene, options).map_err(GpuError::Precision)?;
         let rays = crate::camera::PrimaryRays::for_camera(&scene.camera, options.width, options.height);
-        let buffers = SceneBuffers::new(scene, &rays, &gpu.options);
+        let secondary_rays = tree.depth > 0 || (options.shading.shadows && !scene.lights.is_empty());
+        let buffers = SceneBuffers::new(scene, &rays, &gpu.options, secondary_rays);
         let flat = buffers.bins.is_none() && buffers.bvh.is_none();
         let primitives =
             buffers.spheres.len() + buffers.ellipsoids.len() + buffers.planes.len() + buffers.triangles.len();
@@ -72,7 +73,7 @@ impl<'a> PreparedScene<'a> {
                 super::flatten::LOOP_LIMIT / 2
             )));
         }
-        let config = KernelConfig::new(&buffers, layout, options);
+        let config = KernelConfig::new(&buffers, layout, options, &tree, gpu.loop_limit().is_some());
         let pipeline = gpu.pipeline(config);
         let inputs = upload_inputs(gpu, &buffers)?;
         let tile_rows = gpu.tile_rows(options.width, &layout)?;
@@ -100,7 +101,9 @@ impl<'a> PreparedScene<'a> {
                 prepare_ms: start.elapsed().as_secs_f64() * 1e3,
                 scene_bytes,
                 acceleration: buffers.acceleration(),
+                pixels_cut_short: 0,
             },
+            fallback: config.loop_canary.then(|| scene.clone()),
         })
     }
 
@@ -141,7 +144,7 @@ impl<'a> PreparedScene<'a> {
             for _ in &tiles {
                 let (slot, first_row, rows, kernel_ns) =
                     ready_rx.recv().map_err(|e| GpuError::Readback(e.to_string()))??;
-                self.hand_over(slot, first_row, rows, &mut on_tile)?;
+                stats.pixels_cut_short += self.hand_over(slot, first_row, rows, &mut on_tile)?;
                 stats.kernel_ns = stats.kernel_ns.zip(kernel_ns).map(|(a, b)| a + b);
                 stats.tiles += 1;
                 // The submitter may already have finished; then nobody needs the slot back.
@@ -151,19 +154,26 @@ impl<'a> PreparedScene<'a> {
         })
     }
 
-    /// Shows the caller the mapped tile, then gives the buffer back to the device.
+    /// Shows the caller the mapped tile, its pixels cut short rendered again by the
+    /// reference, then gives the buffer back to the device; returns how many were.
     fn hand_over<E: From<GpuError>>(
         &self,
         slot: usize,
         first_row: u32,
         rows: u32,
         on_tile: &mut impl FnMut(&ReadTile) -> Result<(), E>,
-    ) -> Result<(), E> {
+    ) -> Result<u64, E> {
         let readback = &self.slots[slot].readback;
         let range = readback.slice(..self.tile_bytes(rows));
+        let mut rerendered = 0;
         let result = {
             let view = range.get_mapped_range().map_err(|e| GpuError::Readback(e.to_string()))?;
-            let words: &[u32] = bytemuck::cast_slice(&view);
+            let mapped: &[u32] = bytemuck::cast_slice(&view);
+            let patched = self.fallback.as_ref().and_then(|scene| self.rerender_cut_short(scene, first_row, mapped));
+            if let Some((_, count)) = &patched {
+                rerendered = *count;
+            }
+            let words = patched.as_ref().map_or(mapped, |(words, _)| &words[..]);
             on_tile(&ReadTile {
                 first_row,
                 rows,
@@ -174,7 +184,27 @@ impl<'a> PreparedScene<'a> {
             })
         };
         readback.unmap();
-        result
+        result.map(|()| rerendered)
+    }
+
+    /// The tile's words with every pixel the kernel marked as cut short replaced by the
+    /// reference's, and how many those were; `None` when none was.
+    fn rerender_cut_short(&self, scene: &Scene, first_row: u32, words: &[u32]) -> Option<(Vec<u32>, u64)> {
+        let stride = self.layout.words() as usize;
+        let width = self.options.width as usize;
+        let cut: Vec<usize> =
+            (0..words.len() / stride).filter(|&k| self.layout.cut_short(&words[k * stride..])).collect();
+        if cut.is_empty() {
+            return None;
+        }
+        let pixels: Vec<(u32, u32)> =
+            cut.iter().map(|&k| ((k % width) as u32, first_row + (k / width) as u32)).collect();
+        let reference = crate::cpu::Reference::new(scene, &self.options).pixels(&pixels);
+        let mut out = words.to_vec();
+        for (n, &k) in cut.iter().enumerate() {
+            self.layout.encode(&reference.pixel(n), &mut out[k * stride..(k + 1) * stride]);
+        }
+        Some((out, cut.len() as u64))
     }
 
     fn tile_bytes(&self, rows: u32) -> u64 {

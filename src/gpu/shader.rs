@@ -19,14 +19,15 @@ use std::sync::OnceLock;
 /// - `bvh.wgsl`: the box test, the nearest-hit and any-hit walks;
 /// - `bins.wgsl`: primary-ray triangles and the packet's walk of a bin;
 /// - `occluded.wgsl`: the any-hit query;
-/// - `surface.wgsl`, `shading.wgsl`, `output.wgsl`: the nearest hit's surface, its colour,
-///   the words it leaves in the output;
+/// - `surface.wgsl`, `shading.wgsl`, `tree.wgsl`, `output.wgsl`: the nearest hit's surface
+///   and where rays leaving it start, its directly lit colour, the reflected and refracted
+///   rays' colours, the words it leaves in the output;
 /// - `entry.wgsl`: `main` and `main_bins`.
 ///
 /// Plain concatenation, not a composer such as naga_oil: nothing is resolved at run time,
 /// no dependency is added, and naga sees one module as it did when the kernel was one file
 /// (lavapipe's compile time, measured with an empty shader cache, did not change).
-pub const FILES: [(&str, &str); 15] = [
+pub const FILES: [(&str, &str); 16] = [
     ("params.wgsl", include_str!("../../shaders/params.wgsl")),
     ("ray.wgsl", include_str!("../../shaders/ray.wgsl")),
     ("camera.wgsl", include_str!("../../shaders/camera.wgsl")),
@@ -40,6 +41,7 @@ pub const FILES: [(&str, &str); 15] = [
     ("occluded.wgsl", include_str!("../../shaders/occluded.wgsl")),
     ("surface.wgsl", include_str!("../../shaders/surface.wgsl")),
     ("shading.wgsl", include_str!("../../shaders/shading.wgsl")),
+    ("tree.wgsl", include_str!("../../shaders/tree.wgsl")),
     ("output.wgsl", include_str!("../../shaders/output.wgsl")),
     ("entry.wgsl", include_str!("../../shaders/entry.wgsl")),
 ];
@@ -54,6 +56,7 @@ pub fn host_constants() -> String {
         ("BIN_SIDE", super::binning::BIN_SIDE, "pixels on a side of a bin (gpu::binning::BIN_SIDE)"),
         ("PACKET", super::BIN_PACKET, "rays per invocation of main_bins (gpu::BIN_PACKET)"),
         ("REF_KIND_SHIFT", REF_KIND_SHIFT, "a reference is kind << REF_KIND_SHIFT | index"),
+        ("TREE_STACK", super::tree::TREE_STACK, "rays waiting in a ray tree (gpu::tree::TREE_STACK)"),
     ];
     for (name, value, what) in sizes {
         let _ = writeln!(out, "// {what}\nconst {name}: u32 = {value}u;");

@@ -109,3 +109,39 @@ pub fn against_sample(ours: &std::path::Path, sample: &std::path::Path, name: &s
     println!("  {name:<22} {off}  (max diff {})", diff.max);
     (diff.off_by_more_than_one as f64 > MAX_OFF_FRACTION * diff.pixels as f64).then(|| format!("{name}: {off}"))
 }
+
+/// The course's command lines of `folder`, each run as written (plus `extra` lines built
+/// from them) inside two copies of the folder, once with `--backend cpu` and once with
+/// `--backend gpu`. For every line with an `-output`: the reference's image against the
+/// course's sample where `expected/` holds one (`sample_of` names it), and the GPU's
+/// against the reference's, each within [`MAX_OFF_FRACTION`]. Returns the failures and
+/// the names of the samples compared.
+pub fn course_lines_on_both_backends(
+    corpus: &std::path::Path,
+    folder: &str,
+    lines: &[Vec<String>],
+) -> (Vec<String>, Vec<String>) {
+    let (cpu, gpu) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
+    copy_course_folder(corpus, folder, cpu.path());
+    copy_course_folder(corpus, folder, gpu.path());
+    let (mut failures, mut samples) = (Vec::new(), Vec::new());
+    for command in lines {
+        run_course_line(cpu.path(), command, "cpu");
+        if self::gpu().is_some() {
+            run_course_line(gpu.path(), command, "gpu");
+        }
+        let Some(k) = command.iter().position(|a| a == "-output") else { continue };
+        let image = &command[k + 1];
+        let stem = image.trim_end_matches(".tga");
+        let sample = corpus.join(format!("{folder}/expected/{stem}.png"));
+        if sample.exists() {
+            failures.extend(against_sample(&cpu.path().join(image), &sample, stem));
+            samples.push(stem.to_string());
+        }
+        if self::gpu().is_some() {
+            let name = format!("{stem} (GPU against the reference)");
+            failures.extend(against_sample(&gpu.path().join(image), &cpu.path().join(image), &name));
+        }
+    }
+    (failures, samples)
+}

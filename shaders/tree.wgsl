@@ -1,0 +1,91 @@
+// The ray tree of docs/SPEC.md §5 without recursion, which WGSL does not have: the rays
+// still to trace wait on an explicit stack, depth first. A node pushes at most two
+// children (reflected, refracted) one level deeper and the last pushed is traced next, so
+// at most one sibling waits per level: BOUNCES + 1 slots, which the host keeps within
+// TREE_STACK (gpu::tree). The colour is linear in what each ray sees, so each ray adds its
+// own shading times the product of the colours on its way from the camera, in whatever
+// order the stack hands it out.
+
+// A ray still to trace.
+struct Pending {
+    ray: Ray,
+    // The product of the reflective and transparent colours on its way from the camera.
+    throughput: vec3<f32>,
+    // The product of their lengths, the weight -weight compares.
+    weight: f32,
+    // The index of refraction of the medium it travels in.
+    index: f32,
+    // Reflections and refractions so far.
+    bounces: u32,
+}
+
+var<private> pending: array<Pending, TREE_STACK>;
+var<private> pending_len: u32;
+
+// Queues a ray whose colour counts `tint` times: not at all where the tint is black or
+// the weight it would carry falls below WEIGHT.
+fn push_ray(ray: Ray, tint: vec3<f32>, parent: Pending, index: f32) {
+    let weight = parent.weight * length(tint);
+    if (all(tint == vec3<f32>(0.0)) || weight < WEIGHT) {
+        return;
+    }
+    pending[pending_len] = Pending(ray, parent.throughput * tint, weight, index, parent.bounces + 1u);
+    pending_len += 1u;
+}
+
+// The direction of the unit ray d refracted at a surface whose unit normal n faces it, from
+// index_from into index_to (Snell's law, as cpu::refract); w = 0 at total internal
+// reflection.
+fn refraction(d: vec3<f32>, n: vec3<f32>, index_from: f32, index_to: f32) -> vec4<f32> {
+    let eta = index_from / index_to;
+    let cos_in = -dot(d, n);
+    let k = 1.0 - eta * eta * (1.0 - cos_in * cos_in);
+    if (k < 0.0) {
+        return vec4<f32>(0.0);
+    }
+    return vec4<f32>(normalize(eta * d + (eta * cos_in - sqrt(k)) * n), 1.0);
+}
+
+// The reflected and refracted rays of the surface `node.ray` hit, while the tree may go
+// deeper. Objects sit in vacuum (GRAMMAR.md A4): a ray entering a surface (ray·N < 0) goes
+// from index 1 into the material's, one leaving it back to 1.
+fn push_children(surface: Surface, node: Pending) {
+    if (node.bounces >= BOUNCES || is_black(surface, node.ray)) {
+        return;
+    }
+    let n = facing_normal(surface, node.ray);
+    let material = materials[surface.material];
+    let d = node.ray.direction;
+    let index_to = select(1.0, material.index_of_refraction, dot(d, surface.normal) < 0.0);
+    // Refraction first, so that reflection, which the reference adds first, is traced first.
+    let refracted = refraction(d, n, node.index, index_to);
+    if (refracted.w != 0.0) {
+        push_ray(Ray(spawn_origin(surface, -n, refracted.xyz), refracted.xyz), material.transparent, node, index_to);
+    }
+    let reflected = d - 2.0 * dot(d, n) * n;
+    push_ray(Ray(spawn_origin(surface, n, reflected), reflected), material.reflective, node, node.index);
+}
+
+// The colour seen along a primary ray that hit `surface`: its own shading, then every ray of
+// its tree (with BOUNCES = 0, the shading alone).
+fn color_of_tree(surface: Surface, ray: Ray) -> vec3<f32> {
+    var color = shade(surface, ray);
+    if (BOUNCES == 0u) {
+        return color;
+    }
+    pending_len = 0u;
+    push_children(surface, Pending(ray, vec3<f32>(1.0), 1.0, 1.0, 0u));
+    while (pending_len > 0u) {
+        pending_len -= 1u;
+        let node = pending[pending_len];
+        let hit = closest_hit(node.ray, 0.0);
+        if (hit.t == NO_HIT) {
+            color += node.throughput * P.background;
+            continue;
+        }
+        let next = surface_at(hit, node.ray);
+        color += node.throughput * shade(next, node.ray);
+        push_children(next, node);
+    }
+    return color;
+}
