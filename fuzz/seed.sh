@@ -1,10 +1,18 @@
 #!/bin/sh
-# Seeds fuzz/corpus/{scene,obj} from the project's scenes and, when it is there, the course's
-# scenes beside the repository (../shared/mit6837/a2; read at run time, never committed).
+# Seeds fuzz/corpus/{scene,obj} from the project's scenes, fuzz/seeds (an assignment-4 scene:
+# point lights, attenuation, every material field) and, when they are there, the course's
+# scenes and meshes (a2, a3, a4 of $RAYCASTER_CORPUS, else of ../shared/mit6837 beside the
+# repository; read at run time, never committed).
 set -eu
+caller=$(pwd)
 cd "$(dirname "$0")"
+case "${RAYCASTER_CORPUS:-}" in
+    "") corpus=../../shared/mit6837 ;;
+    /*) corpus=$RAYCASTER_CORPUS ;;
+    *) corpus=$caller/$RAYCASTER_CORPUS ;;
+esac
 mkdir -p corpus/scene corpus/obj
-for dir in ../scenes ../scenes/hard ../../shared/mit6837/a2; do
+for dir in ../scenes ../scenes/hard seeds "$corpus/a2" "$corpus/a3" "$corpus/a4"; do
     [ -d "$dir" ] || continue
     for f in "$dir"/*.txt; do
         case "$f" in */commands.txt) continue ;; esac

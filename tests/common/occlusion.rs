@@ -4,7 +4,7 @@
 
 use raycaster::camera::{PrimaryRays, Ray};
 use raycaster::cpu::ReferenceScene;
-use raycaster::scene::Scene;
+use raycaster::scene::{Light, Scene};
 
 /// How many of the rays checked were occluded and how many were not, so that a caller can
 /// tell a check that saw both answers from a vacuous one.
@@ -22,8 +22,8 @@ impl Tally {
 }
 
 /// Checks every primary ray of a `width × height` image of `scene`, and from each hit the
-/// rays a shader will cast there: towards each light (a shadow ray), and onwards through
-/// the surface (a refracted ray's simplest case). Each ray is checked with no far limit,
+/// rays a shader will cast there: towards each light (a shadow ray, ending at a point light),
+/// and onwards through the surface (a refracted ray's simplest case). Each ray is checked with no far limit,
 /// and those that hit also with the far limit at, just beyond and just before the nearest
 /// hit, and a unit on either side. The first disagreement is returned as the error.
 pub fn check_scene(scene: &Scene, width: u32, height: u32) -> Result<Tally, String> {
@@ -39,8 +39,17 @@ pub fn check_scene(scene: &Scene, width: u32, height: u32) -> Result<Tally, Stri
             let t_min = 1e-6 * surface.point.abs().max_element().max(1.0);
             let onwards = Ray::new(surface.point, primary.direction, t_min);
             check_ray(&prepared, &onwards, &mut tally)?;
-            for light in scene.lights.iter().filter_map(|l| l.directional()) {
-                check_ray(&prepared, &Ray::new(surface.point, -light.direction, t_min), &mut tally)?;
+            for light in &scene.lights {
+                let shadow = match light {
+                    Light::Directional(light) => Ray::new(surface.point, -light.direction, t_min),
+                    // Towards a point light only up to the light: the ray's own far limit.
+                    Light::Point(light) => {
+                        let offset = light.position - surface.point;
+                        let Some(direction) = offset.try_normalize() else { continue };
+                        Ray { t_max: offset.length(), ..Ray::new(surface.point, direction, t_min) }
+                    }
+                };
+                check_ray(&prepared, &shadow, &mut tally)?;
             }
         }
     }
