@@ -39,9 +39,9 @@ override POINT_LIGHTS: bool = false;
 override SHADOWS: bool = false;
 // The ray tree (shaders/tree.wgsl): reflected and refracted rays at most BOUNCES deep (the
 // host's -bounces, lowered to the depth the materials' weights can reach, below
-// TREE_STACK), none whose weight falls below WEIGHT (-weight).
+// TREE_STACK), none whose weight falls below Params.weight (-weight, a value of the
+// parameters, not an override, so that a new weight compiles no new kernel).
 override BOUNCES: u32 = 0u;
-override WEIGHT: f32 = 0.0;
 // Whether to check, after each pixel, that the driver did not cut its loops short
 // (loops_were_cut in shaders/entry.wgsl): on drivers with a loop limit, where a ray tree
 // could reach it.
@@ -89,9 +89,10 @@ struct Params {
     // gpu::layout::LOOP_CANARY_TRIPS (2), from the buffer so that no compiler unrolls the
     // canary loop.
     loop_canary_trips: u32,
+    // -weight: no secondary ray whose weight falls below it.
+    weight: f32,
     _pad0: u32,
     _pad1: u32,
-    _pad2: u32,
 }
 
 // A sphere in world space (a similarity transform was baked into it).

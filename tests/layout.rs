@@ -71,6 +71,7 @@ fn host_structs_match_the_shader() {
             ("num_planes", offset_of!(Params, num_planes)),
             ("num_triangles", offset_of!(Params, num_triangles)),
             ("loop_canary_trips", offset_of!(Params, loop_canary_trips)),
+            ("weight", offset_of!(Params, weight)),
         ],
     );
     check(
@@ -225,7 +226,6 @@ fn override_constants_match_the_host() {
         point_lights: true,
         shadows: true,
         bounces: 3,
-        weight_bits: 0.01f32.to_bits(),
         loop_canary: true,
         triangle_test: TriangleTest::Watertight,
         sphere_test: SphereTest::Robust,

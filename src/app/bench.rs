@@ -12,7 +12,7 @@ use glam::DVec3;
 use raycaster::cpu::Reference;
 use raycaster::gpu::{Acceleration, GpuError, GpuOptions, GpuRenderer};
 use raycaster::metrics::{compare_frames, depth_range_of, OutputErrors};
-use raycaster::render::{Frame, Output, Pixel, RenderOptions, TriangleTest};
+use raycaster::render::{Frame, Output, Pixel, RenderOptions, Shading, TriangleTest};
 use raycaster::scene::{
     self, Background, Bounds, Camera, DirectionalLight, Light, Material, Mesh, Object, Projection, Scene, Shape,
 };
@@ -29,6 +29,16 @@ pub struct Case {
     pub height: u32,
     pub triangle_test: TriangleTest,
     pub acceleration: Acceleration,
+    /// Shadows, bounces and the rest (the course's flags on its A4 lines).
+    pub shading: Shading,
+}
+
+impl Case {
+    /// Whether the case casts rays other than primary ones: then the whole image is
+    /// rendered by the reference too, timed, and its rays counted.
+    pub fn secondary_rays(&self) -> bool {
+        self.shading.bounces > 0 || (self.shading.shadows && !self.scene.lights.is_empty())
+    }
 }
 
 /// What one case measured.
@@ -56,6 +66,12 @@ pub struct Row {
     /// Pixels the error was measured on.
     pub samples: usize,
     pub errors: Vec<OutputErrors>,
+    /// Every ray of the image, primary, reflected, refracted and shadow, as the reference
+    /// counted them (the kernel traces the same tree, to f32 rounding); the pixels for a
+    /// case of primary rays alone.
+    pub rays: u64,
+    /// Wall time of the reference's whole render, for a case with secondary rays.
+    pub reference_ms: Option<f64>,
 }
 
 impl Row {
@@ -63,8 +79,14 @@ impl Row {
         self.width as u64 * self.height as u64
     }
 
+    /// Rays per second in the kernel, every ray counted.
     pub fn mrays_per_s(&self) -> f64 {
-        self.pixels() as f64 / (self.kernel_ms * 1e3)
+        self.rays as f64 / (self.kernel_ms * 1e3)
+    }
+
+    /// Rays per second of the reference's whole render, where it was timed.
+    pub fn reference_mrays_per_s(&self) -> Option<f64> {
+        self.reference_ms.map(|ms| self.rays as f64 / (ms * 1e3))
     }
 
     /// The scene's name, with the image size and the triangle test where they are not the
@@ -109,10 +131,16 @@ impl Row {
 
 /// Measures `case` with `runs` renders (at least 1).
 pub fn run_case(gpu: &GpuRenderer, case: &Case, runs: usize) -> Result<Row, GpuError> {
-    let options = RenderOptions { triangle_test: case.triangle_test, ..RenderOptions::all(case.width, case.height) };
+    let options = RenderOptions {
+        triangle_test: case.triangle_test,
+        shading: case.shading,
+        ..RenderOptions::all(case.width, case.height)
+    };
     let gpu = &gpu.on_same_device(GpuOptions { acceleration: case.acceleration, ..*gpu.options() });
     let counts = case.scene.primitive_counts();
-    let sampler = Sampler::new(options.width, options.height, sample_budget(counts.triangles));
+    // Secondary rays: every pixel is compared (and the reference's time is part of the row).
+    let budget = if case.secondary_rays() { usize::MAX } else { sample_budget(counts.triangles) };
+    let sampler = Sampler::new(options.width, options.height, budget);
     memory::reset_peak();
     let mut kernel = Vec::new();
     let mut wall = Vec::new();
@@ -139,7 +167,11 @@ pub fn run_case(gpu: &GpuRenderer, case: &Case, runs: usize) -> Result<Row, GpuE
     }
     let peak_mib = memory::peak_mib();
     let positions: Vec<(u32, u32)> = gpu_samples.iter().map(|s: &Sample| s.position).collect();
-    let reference = Reference::new(&case.scene, &options).pixels(&positions);
+    let reference_renderer = Reference::new(&case.scene, &options);
+    let start = Instant::now();
+    let reference = reference_renderer.pixels(&positions);
+    let reference_ms = case.secondary_rays().then(|| start.elapsed().as_secs_f64() * 1e3);
+    let rays = if case.secondary_rays() { reference_renderer.rays_traced() } else { options.pixel_count() as u64 };
     let ours = samples_frame(&options, &gpu_samples);
     Ok(Row {
         name: case.name.clone(),
@@ -158,6 +190,8 @@ pub fn run_case(gpu: &GpuRenderer, case: &Case, runs: usize) -> Result<Row, GpuE
         peak_mib,
         samples: positions.len(),
         errors: compare_frames(&ours, &reference, depth_range_of(&reference)),
+        rays,
+        reference_ms,
     })
 }
 
@@ -270,6 +304,7 @@ pub fn standard_cases(corpus: &Path, quick: bool) -> Result<Vec<Case>, scene::Sc
         height: size,
         triangle_test: TriangleTest::default(),
         acceleration: Acceleration::Auto,
+        shading: Shading::default(),
     };
     let mut cases = Vec::new();
     if quick {
@@ -277,6 +312,7 @@ pub fn standard_cases(corpus: &Path, quick: bool) -> Result<Vec<Case>, scene::Sc
             cases.push(case(name, scene::load_scene(&course.join(format!("{name}.txt")))?, 64));
         }
         cases.push(case("bunny_1k", mesh_scene("bunny_1k", scene::load_obj(&course.join("bunny_1k.obj"))?), 64));
+        cases.extend(course_a4_cases(corpus, &["output4_04d"], 64)?);
         return Ok(cases);
     }
     let mut course_files: Vec<PathBuf> = std::fs::read_dir(&course)
@@ -316,12 +352,64 @@ pub fn standard_cases(corpus: &Path, quick: bool) -> Result<Vec<Case>, scene::Sc
     for test in [TriangleTest::Cramer, TriangleTest::Moller] {
         cases.push(Case { triangle_test: test, ..case("bunny_40k", bunny.clone(), 2048) });
     }
+    cases.extend(course_a4_cases(corpus, A4_LINES, 200)?);
     // The design choice measured in the same run: each way of finding candidates.
     for acceleration in [Acceleration::Bins, Acceleration::Hierarchy] {
         for (name, scene) in [("bunny_40k", &bunny), (icosphere_name.as_str(), &icosphere)] {
             cases.push(Case { acceleration, ..case(name, scene.clone(), 512) });
         }
         cases.push(Case { acceleration, ..case("bunny_40k", bunny.clone(), 2048) });
+    }
+    Ok(cases)
+}
+
+/// The lines of the course's `a4/commands.txt` the bench measures, by their `-output`: a
+/// sphere's shadow; a mirrored floor; a mirror sphere, 3 bounces; transparent bars, 10 and 5
+/// bounces; a glass sphere, 5 bounces; point lights; the faceted gem, 5 bounces.
+const A4_LINES: &[&str] = &[
+    "output4_01",
+    "output4_03",
+    "output4_04d",
+    "output4_05",
+    "output4_06f",
+    "output4_09",
+    "output4_10",
+    "output4_13",
+    "output4_14f",
+];
+
+/// The course's A4 command lines named in `lines` (by their `-output`), as cases at
+/// `size`² with the line's shading flags; none where the course's files have no `a4/`.
+fn course_a4_cases(corpus: &Path, lines: &[&str], size: u32) -> Result<Vec<Case>, scene::SceneError> {
+    let folder = corpus.join("a4");
+    let commands = folder.join("commands.txt");
+    let Ok(text) = std::fs::read_to_string(&commands) else { return Ok(Vec::new()) };
+    let mut cases = Vec::new();
+    for line in text.lines() {
+        let words: Vec<&str> = line.split_whitespace().collect();
+        let after = |flag: &str| words.iter().position(|w| *w == flag).and_then(|k| words.get(k + 1)).copied();
+        let Some(name) = after("-output").map(|o| o.trim_end_matches(".tga")) else { continue };
+        if !lines.contains(&name) {
+            continue;
+        }
+        let number = |flag: &str| after(flag).and_then(|v| v.parse::<f64>().ok());
+        let shading = Shading {
+            shade_back: words.contains(&"-shade_back"),
+            shadows: words.contains(&"-shadows"),
+            bounces: number("-bounces").map_or(0, |b| b as u32),
+            weight: number("-weight").unwrap_or(0.0),
+            ..Shading::default()
+        };
+        let input = after("-input").ok_or_else(|| scene::SceneError::in_file(&commands, "a line without -input"))?;
+        cases.push(Case {
+            name: name.to_string(),
+            scene: scene::load_scene(&folder.join(input))?,
+            width: size,
+            height: size,
+            triangle_test: TriangleTest::default(),
+            acceleration: Acceleration::Auto,
+            shading,
+        });
     }
     Ok(cases)
 }
@@ -334,13 +422,13 @@ pub fn markdown(rows: &[Row], adapter: &str) -> String {
         rows.first().map_or(0, |r| r.runs)
     );
     out.push_str(
-        "| scene | triangle test | candidates from | primitives | pixels | build ms | kernel ms | wall ms | Mrays/s | scene MiB | peak MiB | samples | >1 level | hit/miss | depth rel. max | normal max (rad) |\n\
-         | --- | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n",
+        "| scene | triangle test | candidates from | primitives | pixels | build ms | kernel ms | wall ms | rays/pixel | Mrays/s | reference Mrays/s | scene MiB | peak MiB | samples | >1 level | hit/miss | depth rel. max | normal max (rad) |\n\
+         | --- | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n",
     );
     for r in rows {
         let _ = writeln!(
             out,
-            "| {} | {} | {} | {} | {}² | {} | {:.2} | {:.1} | {:.1} | {:.2} | {:.0} | {} | {:.3}% | {} | {:.1e} | {:.1e} |",
+            "| {} | {} | {} | {} | {}² | {} | {:.2} | {:.1} | {:.2} | {:.1} | {} | {:.2} | {:.0} | {} | {:.3}% | {} | {:.1e} | {:.1e} |",
             r.name,
             r.triangle_test.name(),
             r.acceleration.name(),
@@ -349,7 +437,9 @@ pub fn markdown(rows: &[Row], adapter: &str) -> String {
             r.acceleration_build_ms.map_or("-".to_string(), |ms| format!("{ms:.1}")),
             r.kernel_ms,
             r.wall_ms,
+            r.rays as f64 / r.pixels() as f64,
             r.mrays_per_s(),
+            r.reference_mrays_per_s().map_or("-".to_string(), |m| format!("{m:.2}")),
             r.scene_bytes as f64 / (1 << 20) as f64,
             r.peak_mib,
             r.samples,
@@ -364,11 +454,11 @@ pub fn markdown(rows: &[Row], adapter: &str) -> String {
 
 /// The rows as CSV, one line each.
 pub fn csv(rows: &[Row]) -> String {
-    let mut out = String::from("scene,triangle_test,acceleration,primitives,triangles,width,height,acceleration_build_ms,scene_bytes,kernel_ms,kernel_from_timestamps,wall_ms,mrays_per_s,peak_mib,samples,off_by_more_than_one_fraction,hit_mismatches,depth_rel_max,normal_angle_max_rad,color_float_max\n");
+    let mut out = String::from("scene,triangle_test,acceleration,primitives,triangles,width,height,acceleration_build_ms,scene_bytes,kernel_ms,kernel_from_timestamps,wall_ms,rays,mrays_per_s,reference_ms,peak_mib,samples,off_by_more_than_one_fraction,hit_mismatches,depth_rel_max,normal_angle_max_rad,color_float_max\n");
     for r in rows {
         let _ = writeln!(
             out,
-            "{},{},{},{},{},{},{},{},{},{:.4},{},{:.3},{:.3},{:.1},{},{:.6},{},{:.3e},{:.3e},{:.3e}",
+            "{},{},{},{},{},{},{},{},{},{:.4},{},{:.3},{},{:.3},{},{:.1},{},{:.6},{},{:.3e},{:.3e},{:.3e}",
             r.name,
             r.triangle_test.name(),
             r.acceleration.name(),
@@ -381,7 +471,9 @@ pub fn csv(rows: &[Row]) -> String {
             r.kernel_ms,
             r.timestamps,
             r.wall_ms,
+            r.rays,
             r.mrays_per_s(),
+            r.reference_ms.map_or(String::new(), |ms| format!("{ms:.3}")),
             r.peak_mib,
             r.samples,
             r.off_fraction(),

@@ -21,6 +21,7 @@ use crate::render::{Frame, Output, Pixel, RenderOptions};
 use crate::scene::{Light, Material, Scene};
 use glam::DVec3;
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicU64, Ordering};
 
 /// Renders `scene` with the f64 reference.
 pub fn render(scene: &Scene, options: &RenderOptions) -> Frame {
@@ -46,12 +47,25 @@ pub struct Reference<'a> {
     prepared: ReferenceScene<'a>,
     rays: PrimaryRays,
     options: RenderOptions,
+    /// Rays traced so far: primary, reflected, refracted and shadow rays.
+    traced: AtomicU64,
 }
 
 impl<'a> Reference<'a> {
     pub fn new(scene: &'a Scene, options: &RenderOptions) -> Reference<'a> {
         let rays = PrimaryRays::for_camera(&scene.camera, options.width, options.height);
-        Reference { prepared: ReferenceScene::new(scene), rays, options: *options }
+        Reference { prepared: ReferenceScene::new(scene), rays, options: *options, traced: AtomicU64::new(0) }
+    }
+
+    /// How many rays the renders so far traced: one per pixel, plus every reflected,
+    /// refracted and shadow ray (`bench` counts rays per second by it).
+    pub fn rays_traced(&self) -> u64 {
+        self.traced.load(Ordering::Relaxed)
+    }
+
+    /// Counts `n` rays about to be traced.
+    fn count(&self, n: u64) {
+        self.traced.fetch_add(n, Ordering::Relaxed);
     }
 
     /// Image rows `first_row .. first_row + rows` (from the top) as a frame of full rows.
@@ -83,6 +97,7 @@ impl<'a> Reference<'a> {
     /// Pixel (i from the left, j from the bottom): the kernel's stages, in its order.
     fn pixel(&self, i: u32, j: u32) -> Pixel {
         let ray = self.primary_ray(i, j); // §3
+        self.count(1);
         let hit = self.prepared.closest_hit(&ray); // §4
         let surface = hit.map(|hit| self.prepared.surface_at(&hit, &ray)); // §4
         let color = match (&surface, self.options.outputs.contains(Output::Color)) {
@@ -100,6 +115,7 @@ impl<'a> Reference<'a> {
 
     /// The colour seen along a secondary ray: what it hits, shaded, or the background.
     fn trace(&self, ray: &Ray, path: Path) -> DVec3 {
+        self.count(1);
         match self.prepared.closest_hit(ray) {
             None => self.prepared.scene.background.color,
             Some(hit) => self.shade(&self.prepared.surface_at(&hit, ray), ray, path),
@@ -144,6 +160,7 @@ impl<'a> Reference<'a> {
                 if let Light::Point(light) = light {
                     shadow.t_max = (light.position - origin).length();
                 }
+                self.count(1);
                 if self.prepared.occluded(&shadow) {
                     continue;
                 }

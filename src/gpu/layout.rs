@@ -27,7 +27,9 @@ pub struct Params {
     /// [`LOOP_CANARY_TRIPS`], read from the buffer so that the compiler cannot unroll the
     /// kernel's canary loop.
     pub loop_canary_trips: u32,
-    pub _pad: [u32; 3],
+    /// `-weight`: no secondary ray whose weight falls below it.
+    pub weight: f32,
+    pub _pad: [u32; 2],
 }
 
 /// How many times the kernel's canary loop runs (WGSL `loops_were_cut`): twice, unless the

@@ -135,8 +135,6 @@ pub struct KernelConfig {
     pub shadows: bool,
     /// The ray tree's depth ([`tree::TreeShape::depth`]).
     pub bounces: u32,
-    /// `-weight`, as the bits of the f32 the kernel compares (so that the key hashes).
-    pub weight_bits: u32,
     /// Check every pixel for loops the driver cut short ([`GpuRenderer::loop_limit`]).
     pub loop_canary: bool,
     pub triangle_test: TriangleTest,
@@ -171,7 +169,6 @@ impl KernelConfig {
             point_lights: buffers.lights.iter().any(|l| l.is_point != 0),
             shadows: shading.shadows && !buffers.lights.is_empty(),
             bounces: tree.depth,
-            weight_bits: if tree.depth > 0 { (shading.weight as f32).to_bits() } else { 0 },
             // Only a ray tree or shadow rays multiply a pixel's loops; the rest is left to
             // the accelerations' own bounds. The tree runs only for the colour image.
             loop_canary: loop_limit
@@ -209,7 +206,7 @@ impl KernelConfig {
     }
 
     /// The values for `PipelineCompilationOptions::constants`.
-    pub fn constants(&self) -> [(&'static str, f64); 23] {
+    pub fn constants(&self) -> [(&'static str, f64); 22] {
         let b = |v: bool| if v { 1.0 } else { 0.0 };
         [
             ("HAS_SPHERES", b(self.has_spheres)),
@@ -229,7 +226,6 @@ impl KernelConfig {
             ("POINT_LIGHTS", b(self.point_lights)),
             ("SHADOWS", b(self.shadows)),
             ("BOUNCES", self.bounces as f64),
-            ("WEIGHT", f32::from_bits(self.weight_bits) as f64),
             ("LOOP_CANARY", b(self.loop_canary)),
             ("TRIANGLE_TEST", self.triangle_test as u32 as f64),
             ("SPHERE_TEST", self.sphere_test as u32 as f64),
@@ -270,6 +266,9 @@ pub const BINDINGS: [Binding; 13] = [
     binding::<[u32; 2]>("bin_ranges", false),
     binding::<layout::BinItem>("bin_items", false),
 ];
+
+/// Kernels a renderer keeps compiled (see [`GpuRenderer::pipeline`]).
+const MAX_CACHED_PIPELINES: usize = 32;
 
 /// The `@binding` of the output (`pixels`).
 const OUTPUT_BINDING: usize = 7;
@@ -456,6 +455,11 @@ impl GpuRenderer {
 
     fn pipeline(&self, config: KernelConfig) -> wgpu::ComputePipeline {
         let mut cache = self.pipelines.lock().unwrap_or_else(|e| e.into_inner());
+        // A compiled kernel holds megabytes on lavapipe; a process that renders many kinds
+        // of scene (the random-scene test: hundreds) starts over rather than keep them all.
+        if cache.len() >= MAX_CACHED_PIPELINES && !cache.contains_key(&config) {
+            cache.clear();
+        }
         cache
             .entry(config)
             .or_insert_with(|| {

@@ -86,7 +86,7 @@ impl<'a> PreparedScene<'a> {
             pipeline,
             packet: config.packet(),
             layout,
-            params: buffers.params,
+            params: Params { weight: options.shading.weight as f32, ..buffers.params },
             options: *options,
             tile_rows,
             slots,
