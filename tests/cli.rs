@@ -261,7 +261,8 @@ fn batch_runs_every_line_and_reports_failures() {
 }
 
 /// The bench's quick version runs in seconds and writes a table, a CSV and a plot whose
-/// rows carry both a speed and an error (so the bench cannot rot unnoticed).
+/// rows carry both a speed and an error (so the bench cannot rot unnoticed), one of them an
+/// A4 line whose rays are all counted.
 #[test]
 fn bench_quick_writes_table_csv_and_plot() {
     let Some(corpus) = common::corpus() else { return };
@@ -279,7 +280,13 @@ fn bench_quick_writes_table_csv_and_plot() {
     let header: Vec<&str> = lines.next().unwrap().split(',').collect();
     let column = |name: &str| header.iter().position(|h| *h == name).unwrap_or_else(|| panic!("no column {name}"));
     let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
-    assert_eq!(rows.len(), 4, "{csv}");
+    assert_eq!(rows.len(), 5, "{csv}");
+    // The A4 line (a mirror sphere, 3 bounces, shadows) counts every ray, more than a
+    // pixel's one, and times the reference on the whole image.
+    let a4 = rows.iter().find(|r| r[0] == "output4_04d").expect("an A4 row");
+    let (rays, pixels): (u64, u64) = (a4[column("rays")].parse().unwrap(), 64 * 64);
+    assert!(rays > pixels && a4[column("reference_ms")].parse::<f64>().unwrap() > 0.0, "{a4:?}");
+    assert_eq!(a4[column("samples")], "4096", "every pixel compared");
     for row in &rows {
         let mrays: f64 = row[column("mrays_per_s")].parse().unwrap();
         let off: f64 = row[column("off_by_more_than_one_fraction")].parse().unwrap();

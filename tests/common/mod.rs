@@ -112,9 +112,9 @@ pub fn against_sample(ours: &std::path::Path, sample: &std::path::Path, name: &s
 
 /// The course's command lines of `folder`, each run as written (plus `extra` lines built
 /// from them) inside two copies of the folder, once with `--backend cpu` and once with
-/// `--backend gpu`. For every line with an `-output`: the reference's image against the
-/// course's sample where `expected/` holds one (`sample_of` names it), and the GPU's
-/// against the reference's, each within [`MAX_OFF_FRACTION`]. Returns the failures and
+/// `--backend gpu`. For every line with an `-output`: both images against the course's
+/// sample where `expected/` holds one, and the GPU's against the reference's, each within
+/// [`MAX_OFF_FRACTION`]. Returns the failures and
 /// the names of the samples compared.
 pub fn course_lines_on_both_backends(
     corpus: &std::path::Path,
@@ -136,6 +136,9 @@ pub fn course_lines_on_both_backends(
         let sample = corpus.join(format!("{folder}/expected/{stem}.png"));
         if sample.exists() {
             failures.extend(against_sample(&cpu.path().join(image), &sample, stem));
+            if self::gpu().is_some() {
+                failures.extend(against_sample(&gpu.path().join(image), &sample, &format!("{stem} (GPU)")));
+            }
             samples.push(stem.to_string());
         }
         if self::gpu().is_some() {
