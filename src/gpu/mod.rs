@@ -155,7 +155,7 @@ impl KernelConfig {
     ) -> KernelConfig {
         let shading = &options.shading;
         let specular = buffers.materials.iter().any(|m| m.specular != [0.0; 3]);
-        KernelConfig {
+        let mut config = KernelConfig {
             has_spheres: !buffers.spheres.is_empty(),
             has_ellipsoids: !buffers.ellipsoids.is_empty(),
             has_planes: !buffers.planes.is_empty(),
@@ -169,16 +169,16 @@ impl KernelConfig {
             point_lights: buffers.lights.iter().any(|l| l.is_point != 0),
             shadows: shading.shadows && !buffers.lights.is_empty(),
             bounces: tree.depth,
-            // Only a ray tree or shadow rays multiply a pixel's loops; the rest is left to
-            // the accelerations' own bounds. The tree runs only for the colour image.
-            loop_canary: loop_limit
-                && pixel_layout.outputs.contains(Output::Color)
-                && (tree.depth > 0 || (shading.shadows && !buffers.lights.is_empty())),
+            loop_canary: false,
             triangle_test: options.triangle_test,
             sphere_test: options.sphere_test,
             use_bvh: buffers.bvh.is_some(),
             use_bins: buffers.bins.is_some(),
-        }
+        };
+        // Only a ray tree or shadow rays multiply a pixel's loops; the rest is left to the
+        // accelerations' own bounds. The tree runs only for the colour image.
+        config.loop_canary = loop_limit && pixel_layout.outputs.contains(Output::Color) && config.secondary_rays();
+        config
     }
 
     /// Pixels each invocation renders, stacked in a column (the kernel's `PACKET` in
