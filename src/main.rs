@@ -11,7 +11,7 @@ use raycaster::scene::SceneWarning;
 use std::process::ExitCode;
 
 /// The one place an error ends the command: it is printed once, as `raycaster: ERROR`, and
-/// its kind sets the exit status (2 usage, 1 failure; the signal thread reports 130/143 the
+/// its kind sets the exit status (2 usage, 1 failure; the interrupt handler reports 130/143 the
 /// same way).
 fn main() -> ExitCode {
     give_mesa_a_runtime_dir();
@@ -22,7 +22,7 @@ fn main() -> ExitCode {
 }
 
 fn run() -> Result<(), Failure> {
-    app::signals::clean_up_on_interrupt().map_err(|e| Failure::Failed(format!("cannot handle signals: {e}")))?;
+    app::signals::clean_up_on_interrupt().map_err(|e| Failure::Failed(format!("cannot handle interrupts: {e}")))?;
     let line = app::cli::parse_command_line(std::env::args_os().skip(1))?;
     app::validate::check(&line.command)?;
     let habits = line.habits;
@@ -117,7 +117,7 @@ fn batch(file: &std::path::Path, choice: BackendChoice, shard: Option<Split>, ha
     if habits.verbosity == Verbosity::Verbose {
         notice(&[format!("backend: {}", backend.describe())]);
         notice(&timings);
-        notice(&[format!("memory: peak resident {:.0} MiB", app::memory::peak_mib())]);
+        notice(&[format!("memory: {}", app::memory::describe_peak())]);
     }
     if count.failed > 0 {
         return Err(Failure::Failed(format!(
@@ -220,7 +220,9 @@ fn notice(lines: &[String]) {
 }
 /// Mesa's Vulkan drivers print "XDG_RUNTIME_DIR is invalid or not set" on every start when
 /// the variable is missing (headless machines, CI). Point it at a private folder of ours
-/// before any thread exists, so the message does not bury our own.
+/// before any thread exists, so the message does not bury our own. (A freedesktop variable:
+/// nothing reads it on Windows.)
+#[cfg(unix)]
 fn give_mesa_a_runtime_dir() {
     if std::env::var_os("XDG_RUNTIME_DIR").is_some() {
         return;
@@ -231,15 +233,14 @@ fn give_mesa_a_runtime_dir() {
     }
 }
 
+#[cfg(not(unix))]
+fn give_mesa_a_runtime_dir() {}
+
+/// The owner of the folders we create, on every Unix (macOS has no /proc/self to ask).
 #[cfg(unix)]
 fn user_id() -> u32 {
-    use std::os::unix::fs::MetadataExt;
-    std::fs::metadata("/proc/self").map(|m| m.uid()).unwrap_or(0)
-}
-
-#[cfg(not(unix))]
-fn user_id() -> u32 {
-    0
+    // SAFETY: geteuid takes nothing and cannot fail.
+    unsafe { libc::geteuid() }
 }
 
 #[cfg(unix)]
@@ -258,9 +259,4 @@ fn make_private_dir(dir: &std::path::Path) -> std::io::Result<()> {
         }
         Err(e) => Err(e),
     }
-}
-
-#[cfg(not(unix))]
-fn make_private_dir(_: &std::path::Path) -> std::io::Result<()> {
-    Err(std::io::Error::other("unused"))
 }

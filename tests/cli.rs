@@ -487,7 +487,9 @@ fn warnings_name_file_line_and_column() {
 
 /// Ctrl-C (SIGINT) or SIGTERM in the middle of a render, or of a batch, removes every
 /// temporary file and exits 130 or 143. The CPU backend at 12000² takes long enough that
-/// the signal arrives while both outputs are being written.
+/// the signal arrives while both outputs are being written. (Windows' console events are
+/// covered by the unit tests of src/app/signals.)
+#[cfg(unix)]
 #[test]
 fn an_interrupted_render_leaves_nothing_behind() {
     for (signal, status, name) in [(libc::SIGINT, 130, "SIGINT"), (libc::SIGTERM, 143, "SIGTERM")] {
@@ -519,6 +521,7 @@ fn an_interrupted_render_leaves_nothing_behind() {
 }
 
 /// Waits until `count` temporary files of a render exist in `dir` (at most a minute).
+#[cfg(unix)]
 fn wait_for_temporary_files(child: &std::process::Child, dir: &Path, count: usize) {
     let start = std::time::Instant::now();
     loop {

@@ -61,8 +61,8 @@ pub struct Row {
     /// Median wall time of the whole render (flatten, upload, kernel, read-back).
     pub wall_ms: f64,
     pub runs: usize,
-    /// Peak resident memory of the process during the case (Linux; 0 elsewhere).
-    pub peak_mib: f64,
+    /// Peak resident memory of the process during the case (Linux only).
+    pub peak_mib: Option<f64>,
     /// Pixels the error was measured on.
     pub samples: usize,
     pub errors: Vec<OutputErrors>,
@@ -428,7 +428,7 @@ pub fn markdown(rows: &[Row], adapter: &str) -> String {
     for r in rows {
         let _ = writeln!(
             out,
-            "| {} | {} | {} | {} | {}² | {} | {:.2} | {:.1} | {:.2} | {:.1} | {} | {:.2} | {:.0} | {} | {:.3}% | {} | {:.1e} | {:.1e} |",
+            "| {} | {} | {} | {} | {}² | {} | {:.2} | {:.1} | {:.2} | {:.1} | {} | {:.2} | {} | {} | {:.3}% | {} | {:.1e} | {:.1e} |",
             r.name,
             r.triangle_test.name(),
             r.acceleration.name(),
@@ -441,7 +441,7 @@ pub fn markdown(rows: &[Row], adapter: &str) -> String {
             r.mrays_per_s(),
             r.reference_mrays_per_s().map_or("-".to_string(), |m| format!("{m:.2}")),
             r.scene_bytes as f64 / (1 << 20) as f64,
-            r.peak_mib,
+            r.peak_mib.map_or("-".to_string(), |mib| format!("{mib:.0}")),
             r.samples,
             100.0 * r.off_fraction(),
             r.hit_mismatches(),
@@ -458,7 +458,7 @@ pub fn csv(rows: &[Row]) -> String {
     for r in rows {
         let _ = writeln!(
             out,
-            "{},{},{},{},{},{},{},{},{},{:.4},{},{:.3},{},{:.3},{},{:.1},{},{:.6},{},{:.3e},{:.3e},{:.3e}",
+            "{},{},{},{},{},{},{},{},{},{:.4},{},{:.3},{},{:.3},{},{},{},{:.6},{},{:.3e},{:.3e},{:.3e}",
             r.name,
             r.triangle_test.name(),
             r.acceleration.name(),
@@ -474,7 +474,7 @@ pub fn csv(rows: &[Row]) -> String {
             r.rays,
             r.mrays_per_s(),
             r.reference_ms.map_or(String::new(), |ms| format!("{ms:.3}")),
-            r.peak_mib,
+            r.peak_mib.map_or(String::new(), |mib| format!("{mib:.1}")),
             r.samples,
             r.off_fraction(),
             r.hit_mismatches(),

@@ -1,9 +1,10 @@
 //! How the command ends. Every error reaches `main` as a [`Failure`], which carries its exit
-//! status, and is reported there in one place; the signal handler reports through the same
+//! status, and is reported there in one place; the interrupt handler reports through the same
 //! function. Writing to a closed stdout or stderr (`raycaster --help | head -1`) is not an
 //! error: the text is dropped and the command goes on to its own verdict.
 
 use crate::app::args::UsageError;
+use crate::app::interrupt::Interrupt;
 use crate::app::job;
 use raycaster::gpu::GpuError;
 use std::io::Write;
@@ -20,10 +21,10 @@ pub enum Failure {
     /// Anything else that failed (compare's verdict, lines of a batch, the bench): status 1.
     #[error("{0}")]
     Failed(String),
-    /// Interrupted by a signal (SIGINT, SIGTERM, SIGHUP): status 128 + its number, the
-    /// shells' convention.
-    #[error("interrupted by {}", signal_name(*.0))]
-    Signal(i32),
+    /// Interrupted (Ctrl-C, SIGTERM, a closed console...): 130, 143 or 129, the shells'
+    /// convention.
+    #[error("interrupted by {}", .0.name())]
+    Interrupted(Interrupt),
 }
 
 impl From<GpuError> for Failure {
@@ -37,7 +38,7 @@ impl Failure {
         match self {
             Failure::Usage(_) => 2,
             Failure::Job(_) | Failure::Failed(_) => 1,
-            Failure::Signal(signal) => u8::try_from(128 + signal).unwrap_or(u8::MAX),
+            Failure::Interrupted(interrupt) => interrupt.status(),
         }
     }
 }
@@ -66,15 +67,5 @@ pub fn print(text: &str) -> Result<(), Failure> {
     match out.write_all(text.as_bytes()).and_then(|()| out.flush()) {
         Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => Err(Failure::Failed(format!("stdout: {e}"))),
         _ => Ok(()),
-    }
-}
-
-fn signal_name(signal: i32) -> String {
-    use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
-    match signal {
-        SIGINT => "SIGINT".into(),
-        SIGTERM => "SIGTERM".into(),
-        SIGHUP => "SIGHUP".into(),
-        other => format!("signal {other}"),
     }
 }

@@ -99,7 +99,7 @@ impl Report {
         }
         time += &format!(", writing {:.1} ms", self.write_ms);
         lines.push(time);
-        let mut memory = format!("memory: peak resident {:.0} MiB", memory::peak_mib());
+        let mut memory = format!("memory: {}", memory::describe_peak());
         if let Backend::Gpu(..) = backend {
             memory += &format!(", scene data on the GPU {:.1} KiB", stats.scene_bytes as f64 / 1024.0);
         }

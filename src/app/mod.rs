@@ -9,7 +9,8 @@
 //!    streamed into; [`backend`]: the renderer;
 //! 4. [`flags`]: the table of flags, from which parsing, help and suggestions come;
 //! 5. leaves: [`args`] (the parsed command line), [`part`] (the part-file format),
-//!    [`progress`] (the progress bar), [`memory`] (the peak-memory probe).
+//!    [`progress`] (the progress bar), [`memory`] (the peak-memory probe), [`interrupt`]
+//!    (what can interrupt the command, and its exit status).
 
 pub mod args;
 pub mod backend;
@@ -17,6 +18,7 @@ pub mod bench;
 pub mod cli;
 pub mod exit;
 pub mod flags;
+pub mod interrupt;
 pub mod job;
 pub mod memory;
 pub mod output_file;

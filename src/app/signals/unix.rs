@@ -1,11 +1,12 @@
-//! Interrupts: Ctrl-C (SIGINT), SIGTERM and SIGHUP remove the temporary files of every image
-//! being written, render or batch alike, and end the process with status 128 + the signal's
-//! number (130, 143, 129). A signal the process was started with ignored stays ignored, as
-//! `nohup` and the background jobs of shell scripts expect.
+//! Unix: SIGINT (Ctrl-C), SIGTERM and SIGHUP. A signal the process was started with ignored
+//! stays ignored, as `nohup` and the background jobs of shell scripts expect.
 
-use crate::app::exit::{self, Failure};
+use crate::app::interrupt::Interrupt;
 use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
 use signal_hook::iterator::Signals;
+
+// The interrupts' statuses are computed from POSIX's numbers; these are the platform's.
+const _: () = assert!(SIGHUP == 1 && SIGINT == 2 && SIGTERM == 15);
 
 /// Starts a thread that waits for the signals and handles the first one. It ends the
 /// process from that thread at once, whatever the main thread is doing (rendering a tile
@@ -13,9 +14,8 @@ use signal_hook::iterator::Signals;
 pub fn clean_up_on_interrupt() -> std::io::Result<()> {
     let mut signals = Signals::new([SIGINT, SIGTERM, SIGHUP].into_iter().filter(|&s| !ignored(s)))?;
     std::thread::Builder::new().name("signals".into()).spawn(move || {
-        if let Some(signal) = signals.forever().next() {
-            raycaster::image_io::remove_temporary_files_for_exit();
-            let status = exit::report(&Failure::Signal(signal));
+        if let Some(interrupt) = signals.forever().find_map(Interrupt::from_signal) {
+            let status = super::clean_up(interrupt);
             // `_exit`: no atexit handlers, which could run Mesa's teardown under the feet of
             // its own worker threads.
             signal_hook::low_level::exit(status.into());
