@@ -792,6 +792,14 @@ fn gpu_refuses_a_tree_deeper_than_its_stack_and_auto_falls_back() {
          Group { numObjects 1 MaterialIndex 0 Sphere { center 0 0 0 radius 2 } }\n",
     )
     .unwrap();
+    // More primitives than `auto` traces with the reference anyway on a CPU device: specks
+    // behind the mirror, so that `auto` asks the GPU first on every device.
+    let mut text = std::fs::read_to_string(&scene).unwrap().replace("numObjects 1", "numObjects 201");
+    text.insert_str(
+        text.rfind('}').unwrap(),
+        &(0..200).map(|k| format!("Sphere {{ center {k} 0 -50 radius 0.01 }}\n")).collect::<String>(),
+    );
+    std::fs::write(&scene, text).unwrap();
     let out = |name: &str| dir.path().join(name).to_str().unwrap().to_string();
     let run = |backend: &str, image: &str| {
         raycaster(&[
@@ -846,6 +854,49 @@ fn a_batch_of_preview_lines_says_so_once() {
          no window is opened\n\
          raycaster: commands.txt:3: note: -gui without -output, -normals or -depth: no window is opened, nothing rendered\n"
     );
+}
+
+/// `auto` on a CPU Vulkan device (lavapipe) traces the ray trees of a small scene with the
+/// reference, which is quicker there (`CPU_DEVICE_TREE_PRIMITIVES` in src/app/backend.rs),
+/// and `-v` says so; any other device gets the scene, as does a scene of more primitives
+/// everywhere. (900 × 900, so that neither is a job small enough for the reference at once.) Handed over or not, the image is the one its renderer makes on its own.
+#[test]
+fn auto_traces_small_ray_trees_with_the_reference_on_a_cpu_device() {
+    let Some(gpu) = common::gpu() else { return };
+    let cpu_device = gpu.adapter_info().device_type == wgpu::DeviceType::Cpu;
+    let dir = tempfile::tempdir().unwrap();
+    let scene_with = |specks: usize| {
+        let path = dir.path().join(format!("mirror_{specks}.txt"));
+        let mut text = String::from(
+            "PerspectiveCamera { center 0 2 8 direction 0 -0.2 -1 up 0 1 0 angle 30 }\n\
+             Lights { numLights 1 DirectionalLight { direction -0.3 -1 -0.5 color 0.9 0.9 0.9 } }\n\
+             Materials { numMaterials 2 PhongMaterial { diffuseColor 0.2 0.2 0.2 reflectiveColor 0.7 0.7 0.7 }\n\
+             PhongMaterial { diffuseColor 0.9 0.4 0.1 } }\n",
+        );
+        text += &format!(
+            "Group {{ numObjects {} MaterialIndex 0 Plane {{ normal 0 1 0 offset -1 }} MaterialIndex 1\n",
+            specks + 3
+        );
+        text += "Sphere { center -1 0 0 radius 1 } Sphere { center 1.2 0 -1 radius 1 }\n";
+        text += &(0..specks).map(|k| format!("Sphere {{ center {k} 0 -60 radius 0.01 }}\n")).collect::<String>();
+        std::fs::write(&path, text + "}\n").unwrap();
+        path
+    };
+    for (specks, handed_over) in [(0, cpu_device), (200, false)] {
+        let scene = scene_with(specks);
+        let render = |backend: &str| {
+            let image = dir.path().join(format!("{specks}_{backend}.tga"));
+            let args = ["-input", path_str(&scene), "-size", "900", "900", "-output", path_str(&image)];
+            let run = raycaster(&[&args[..], &["-shadows", "-bounces", "2", "--backend", backend, "-v"]].concat());
+            assert!(run.status.success(), "{}", stderr(&run));
+            (stderr(&run), std::fs::read(&image).unwrap())
+        };
+        let (said, image) = render("auto");
+        let by = if handed_over { "cpu" } else { "gpu" };
+        assert!(said.starts_with(&format!("raycaster: backend: {by}")), "{specks} specks: {said}");
+        assert_eq!(said.contains("auto: ray trees of a scene this small are quicker here"), handed_over, "{said}");
+        assert!(image == render(by).1, "{specks} specks: auto's image is not the {by} backend's");
+    }
 }
 
 /// `-shadows`, `-bounces N` and `-weight W` (GRAMMAR.md A4) are checked like every other

@@ -2,6 +2,7 @@
 
 use crate::app::args::BackendChoice;
 use raycaster::cpu::Reference;
+use raycaster::gpu::tree::TreeShape;
 use raycaster::gpu::{GpuError, GpuRenderer, RenderStats};
 use raycaster::image_io;
 use raycaster::render::{row_tiles, Frame, Output, RenderOptions};
@@ -29,6 +30,9 @@ pub enum Fallback {
     Reference,
 }
 
+/// The reference, for the jobs `auto` hands it from an open GPU ([`Backend::for_scene`]).
+static REFERENCE: Backend = Backend::Cpu;
+
 impl Backend {
     /// Opens the backend `choice` asks for. With `Auto`, a missing GPU falls back to the CPU
     /// reference and the returned notice says so (for stderr).
@@ -41,6 +45,23 @@ impl Backend {
                 Err(e) => Ok((Backend::Cpu, Some(format!("{e}; rendering with the CPU reference instead")))),
             },
         }
+    }
+
+    /// The backend that renders `scene`: this one, or with `auto` the reference where it
+    /// traces the scene quicker than the open GPU ([`reference_traces_quicker`]), with the
+    /// reason in words.
+    pub fn for_scene(&self, scene: &Scene, options: &RenderOptions) -> (&Backend, Option<&'static str>) {
+        match self {
+            Backend::Gpu(gpu, Fallback::Reference) if reference_traces_quicker(gpu, scene, options) => {
+                (&REFERENCE, Some("auto: ray trees of a scene this small are quicker here than on a CPU Vulkan device"))
+            }
+            _ => (self, None),
+        }
+    }
+
+    /// The f64 reference.
+    pub fn reference() -> &'static Backend {
+        &REFERENCE
     }
 
     /// What renders, in words: the adapter, or the reference and its threads.
@@ -192,6 +213,27 @@ pub const REFERENCE_QUICKER_BELOW: u64 = 2_000_000;
 /// pixel, an upper bound of the reference's work.
 pub fn reference_is_quicker(scene: &Scene, options: &RenderOptions) -> bool {
     options.pixel_count() as u64 * scene.primitive_counts().total() as u64 <= REFERENCE_QUICKER_BELOW
+}
+
+/// Primitives (each triangle of a mesh counted) up to which `auto` traces a scene that needs
+/// secondary rays with the reference rather than with a CPU Vulkan device (lavapipe; WARP).
+/// There the kernel's ray trees run no faster than the reference, which tests every
+/// primitive, on scenes this small, and compiling a tree kernel costs about a second more.
+/// Measured on the project's 2-core machine (lavapipe, wall time of the whole process, median
+/// of 3; docs/SPEC.md §6): assignment 4's scenes of 3 to 112 primitives are 1.4 to 13 times
+/// quicker on the reference at 200 × 200, and 1.5 to 3 times at 800 × 800 but the gem
+/// (scene4_14, 112 primitives, 0.8 to 1.7); scene6_07's plane and a bunny of 1000 triangles
+/// with shadows 2.5 times quicker on the GPU at 200 × 200 (0.39 s against 1.0 s), of 40 000
+/// triangles 180 times. A real GPU always gets the scene.
+pub const CPU_DEVICE_TREE_PRIMITIVES: usize = 128;
+
+/// Whether the reference traces `scene` quicker than `gpu` (see
+/// [`CPU_DEVICE_TREE_PRIMITIVES`]): a CPU device, secondary rays, few primitives.
+pub fn reference_traces_quicker(gpu: &GpuRenderer, scene: &Scene, options: &RenderOptions) -> bool {
+    let cpu_device = gpu.adapter_info().device_type == wgpu::DeviceType::Cpu;
+    let shading = &options.shading;
+    let secondary_rays = shading.shadows || TreeShape::new(scene, shading).depth > 0;
+    cpu_device && secondary_rays && scene.primitive_counts().total() <= CPU_DEVICE_TREE_PRIMITIVES
 }
 
 /// One tile's rows of each 8-bit image asked for, RGB, top row first.

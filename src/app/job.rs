@@ -57,8 +57,12 @@ pub fn preview_notice(args: &RenderArgs) -> Option<&'static str> {
 #[derive(Clone, Debug)]
 pub struct Report {
     pub warnings: Vec<SceneWarning>,
-    /// Why `auto` rendered this scene with the reference, when it did.
+    /// Why `auto` rendered this scene with the reference after the GPU refused it, when it
+    /// did (a warning).
     pub notice: Option<String>,
+    /// Why `auto` gave this scene to the reference without asking the GPU, when it did
+    /// ([`Backend::for_scene`]; for `--verbose`).
+    pub handed_over: Option<&'static str>,
     pub stats: RenderStats,
     pub parse_ms: f64,
     /// The backend's time, from the first tile's preparation to the last tile's read-back,
@@ -72,7 +76,9 @@ impl Report {
     /// The lines `--verbose` prints after a render with `backend`.
     pub fn verbose_lines(&self, backend: &Backend, args: &RenderArgs) -> Vec<String> {
         let stats = &self.stats;
+        let backend = if self.handed_over.is_some() { Backend::reference() } else { backend };
         let mut lines = vec![format!("backend: {}", backend.describe())];
+        lines.extend(self.handed_over.map(str::to_string));
         let tiles = if stats.tiles == 1 { "1 tile".to_string() } else { format!("{} tiles", stats.tiles) };
         let mut time = format!("time: parsing {:.1} ms, rendering {:.1} ms in {tiles}", self.parse_ms, self.render_ms);
         if let Backend::Gpu(..) = backend {
@@ -131,8 +137,9 @@ pub fn run_loaded(
     backend: &Backend,
     progress: bool,
 ) -> Result<Report, Error> {
+    let (backend, handed_over) = backend.for_scene(&scene, &options_for(args));
     let (stats, notice, render_ms, write_ms) = render_scene(&scene, args, backend, progress)?;
-    Ok(Report { warnings: scene.warnings, notice, stats, parse_ms, render_ms, write_ms })
+    Ok(Report { warnings: scene.warnings, notice, handed_over, stats, parse_ms, render_ms, write_ms })
 }
 
 /// Renders an already-loaded scene as `args` asks and writes the images, tile by tile, so
@@ -310,15 +317,16 @@ pub fn compare(args: &RenderArgs, outputs: Outputs, gpu: &raycaster::gpu::GpuRen
 #[derive(Debug)]
 pub enum LineReport {
     Warning(SceneWarning),
-    /// `auto` rendered the line with the reference, and why.
+    /// `auto` rendered the line with the reference after the GPU refused it, and why.
     Fallback(String),
     /// Something the line asked for that is not done, as [`preview_notice`] says.
     Notice(&'static str),
     Failure(String),
     /// The line rendered, in this many milliseconds (parsing, rendering, writing; for
-    /// `--verbose`).
+    /// `--verbose`); by the reference when `auto` handed it over ([`Backend::for_scene`]).
     Rendered {
         ms: f64,
+        by_reference: bool,
     },
 }
 
@@ -329,7 +337,8 @@ impl fmt::Display for LineReport {
             LineReport::Fallback(notice) => write!(f, "warning: {notice}"),
             LineReport::Notice(notice) => write!(f, "note: {notice}"),
             LineReport::Failure(message) => f.write_str(message),
-            LineReport::Rendered { ms } => write!(f, "{ms:.1} ms"),
+            LineReport::Rendered { ms, by_reference: false } => write!(f, "{ms:.1} ms"),
+            LineReport::Rendered { ms, by_reference: true } => write!(f, "{ms:.1} ms, by the reference"),
         }
     }
 }
@@ -387,7 +396,7 @@ pub fn run_batch(
                     if let Some(fallback) = done.notice {
                         tell(line_number, LineReport::Fallback(fallback));
                     }
-                    tell(line_number, LineReport::Rendered { ms });
+                    tell(line_number, LineReport::Rendered { ms, by_reference: done.handed_over.is_some() });
                     None
                 }
                 Err(e) => Some(e.to_string()),
