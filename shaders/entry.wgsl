@@ -18,23 +18,33 @@ fn loops_were_cut() -> bool {
     return passes != P.loop_canary_trips;
 }
 
-// Shades and writes tile-local row `row` of column i, when it belongs to this tile; with
-// LOOP_CANARY, marked when its loops were cut short, for the host to render it again.
-fn finish_pixel(i: u32, row: i32, ray: Ray, hit: Closest) {
-    if (row < 0 || row >= i32(P.tile_rows)) {
-        return;
-    }
-    let index = u32(row) * P.width + i;
+// What a pixel shows, shaded and not yet written.
+struct Shaded {
+    hit: bool,
+    color: vec3<f32>,
+    normal: vec3<f32>,
+    t: f32,
+}
+
+fn shade_pixel(ray: Ray, hit: Closest) -> Shaded {
     if (hit.t == NO_HIT) {
-        write_pixel(index, false, P.background, vec3<f32>(0.0), 0.0, LOOP_CANARY && loops_were_cut());
-        return;
+        return Shaded(false, P.background, vec3<f32>(0.0), 0.0);
     }
     let surface = surface_at(hit, ray);
     var color = vec3<f32>(0.0);
     if (WANT_COLOR) {
         color = color_of_tree(surface, ray);
     }
-    write_pixel(index, true, color, surface.normal, hit.t, LOOP_CANARY && loops_were_cut());
+    return Shaded(true, color, surface.normal, hit.t);
+}
+
+// Writes tile-local row `row` of column i, when it belongs to this tile; marked `cut` when
+// the invocation's loops were cut short, for the host to render it again.
+fn write_row(i: u32, row: i32, shaded: Shaded, cut: bool) {
+    if (row < 0 || row >= i32(P.tile_rows)) {
+        return;
+    }
+    write_pixel(u32(row) * P.width + i, shaded.hit, shaded.color, shaded.normal, shaded.t, cut);
 }
 
 @compute @workgroup_size(WORKGROUP, WORKGROUP)
@@ -46,7 +56,8 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let ray = ray_of_row(i, P.first_row + row);
-    finish_pixel(i, i32(row), ray, closest_hit(ray, t_min()));
+    let shaded = shade_pixel(ray, closest_hit(ray, t_min()));
+    write_row(i, i32(row), shaded, LOOP_CANARY && loops_were_cut());
 }
 
 // Image rows base + PACKET·y … + PACKET − 1, where base is the tile's first row rounded
@@ -67,7 +78,15 @@ fn main_bins(@builtin(global_invocation_id) id: vec3<u32>) {
         packet_hits[r] = closest_plane(packet_rays[r], tmin);
     }
     walk_bin_packet((base / BIN_SIDE) * P.bin_columns + i / BIN_SIDE, tmin);
+    var shaded: array<Shaded, PACKET>;
     for (var r = 0u; r < PACKET; r++) {
-        finish_pixel(i, first + i32(r), packet_rays[r], packet_hits[r]);
+        shaded[r] = shade_pixel(packet_rays[r], packet_hits[r]);
+    }
+    // One canary for the invocation, after all of its loops: past the limit only the first
+    // canary runs short, a second one runs in full (tests/loop_limit.rs found the packet's
+    // last three rows wrong and unmarked with one canary per row).
+    let cut = LOOP_CANARY && loops_were_cut();
+    for (var r = 0u; r < PACKET; r++) {
+        write_row(i, first + i32(r), shaded[r], cut);
     }
 }

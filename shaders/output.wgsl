@@ -9,11 +9,15 @@ fn pack_rgb8(c: vec3<f32>) -> u32 {
 
 // The 8-bit images, one word each: colour, |N| (black on a miss), and t as bits for the
 // host to quantise in f64 as the reference does (all ones on a miss). A pixel cut short
-// sets bit 24 of its colour word (gpu::layout::CUT_SHORT_BIT; LOOP_CANARY needs colour).
+// is CUT_SHORT_WORD in its first word, which no output writes: the host renders it again.
 fn write_packed_pixel(index: u32, hit: bool, color: vec3<f32>, normal: vec3<f32>, t: f32, cut: bool) {
     var w = index * PIXEL_WORDS;
+    if (cut) {
+        pixels[w] = CUT_SHORT_WORD;
+        return;
+    }
     if (WANT_COLOR) {
-        pixels[w] = pack_rgb8(color) | select(0u, 1u << 24u, cut);
+        pixels[w] = pack_rgb8(color);
         w += 1u;
     }
     if (WANT_NORMAL) {
@@ -25,15 +29,15 @@ fn write_packed_pixel(index: u32, hit: bool, color: vec3<f32>, normal: vec3<f32>
     }
 }
 
-// Writes one pixel: the hit flag (2 for a pixel cut short, gpu::layout::CUT_SHORT_HIT),
-// then only the outputs asked for.
+// Writes one pixel: the hit flag (CUT_SHORT_HIT for a pixel cut short), then only the
+// outputs asked for.
 fn write_pixel(index: u32, hit: bool, color: vec3<f32>, normal: vec3<f32>, t: f32, cut: bool) {
     if (PACKED_8BIT) {
         write_packed_pixel(index, hit, color, normal, t, cut);
         return;
     }
     var w = index * PIXEL_WORDS;
-    pixels[w] = select(select(0u, 1u, hit), 2u, cut);
+    pixels[w] = select(select(0u, 1u, hit), CUT_SHORT_HIT, cut);
     w += 1u;
     if (WANT_COLOR) {
         pixels[w] = bitcast<u32>(color.x);

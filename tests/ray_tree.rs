@@ -4,7 +4,7 @@
 
 mod common;
 
-use raycaster::gpu::{Acceleration, GpuError, GpuRenderer, RenderStats};
+use raycaster::gpu::{Acceleration, GpuError};
 use raycaster::metrics::compare_frames;
 use raycaster::render::{Frame, Output, RenderOptions, Shading};
 use raycaster::scene::{parse_scene, Scene};
@@ -69,7 +69,7 @@ fn pixels_past_the_loop_limit_are_rendered_by_the_reference() {
     let scene = sphere_field(8000);
     let options = options(24, Shading { shadows: true, bounces: 2, ..Shading::default() });
     let reference = raycaster::cpu::render(&scene, &options);
-    let (ours, stats) = render_gpu(&gpu, &scene, &options);
+    let (ours, stats) = common::render_gpu_tiles(&gpu, &scene, &options);
     assert_within_contract("floats", &ours, &reference);
     if gpu.loop_limit().is_some() {
         let pixels = options.pixel_count() as u64;
@@ -135,20 +135,9 @@ fn secondary_rays_walk_the_hierarchy() {
     let scene = sphere_field(64);
     for shading in [Shading::default(), Shading { shadows: true, bounces: 1, ..Shading::default() }] {
         let options = options(64, shading);
-        let (ours, stats) = render_gpu(&gpu, &scene, &options);
+        let (ours, stats) = common::render_gpu_tiles(&gpu, &scene, &options);
         let expected = if shading.shadows { Acceleration::Hierarchy } else { Acceleration::Bins };
         assert_eq!(stats.acceleration, expected, "{shading:?}");
         assert_within_contract(&format!("{shading:?}"), &ours, &raycaster::cpu::render(&scene, &options));
     }
-}
-
-fn render_gpu(gpu: &GpuRenderer, scene: &Scene, options: &RenderOptions) -> (Frame, RenderStats) {
-    let mut frame = Frame::new(options);
-    let stats = gpu
-        .render_tiles(scene, options, |first_row, tile| {
-            frame.paste(first_row, &tile);
-            Ok::<(), GpuError>(())
-        })
-        .expect("the GPU renders it");
-    (frame, stats)
 }

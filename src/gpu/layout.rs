@@ -166,8 +166,8 @@ impl GpuLight {
 /// bits of `t` (all ones where nothing was hit), which the host quantises in f64.
 ///
 /// A pixel whose loops the driver cut short (`LOOP_CANARY`) is marked: its hit word is
-/// [`CUT_SHORT_HIT`], or its packed colour word has [`CUT_SHORT_BIT`] set. The host renders
-/// it again with the reference ([`PixelLayout::encode`]) before anyone reads it.
+/// [`CUT_SHORT_HIT`], or its first packed word is [`CUT_SHORT_WORD`]. The host renders it
+/// again with the reference ([`PixelLayout::encode`]) before anyone reads it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct PixelLayout {
     pub outputs: Outputs,
@@ -214,9 +214,10 @@ impl PixelLayout {
 
 /// The hit word of a float pixel whose loops were cut short.
 pub const CUT_SHORT_HIT: u32 = 2;
-/// The bit of a packed colour word that marks a pixel whose loops were cut short (above the
-/// three bytes of colour).
-pub const CUT_SHORT_BIT: u32 = 1 << 24;
+/// The first packed word of a pixel whose loops were cut short, whichever outputs it holds:
+/// above every packed colour or normal (three bytes), and a NaN that is not [`PACKED_MISS`]
+/// where it stands for a depth, which no t is. The pixel's other words are not read.
+pub const CUT_SHORT_WORD: u32 = 0xffff_fffe;
 
 /// What a packed depth word holds where the ray hit nothing (a NaN no kernel computes).
 pub const PACKED_MISS: u32 = u32::MAX;
@@ -225,7 +226,7 @@ impl PixelLayout {
     /// Whether the kernel marked the pixel whose words are `words` as cut short.
     pub fn cut_short(&self, words: &[u32]) -> bool {
         if self.packed {
-            self.outputs.contains(Output::Color) && words[0] & CUT_SHORT_BIT != 0
+            words[0] == CUT_SHORT_WORD
         } else {
             words[0] == CUT_SHORT_HIT
         }

@@ -175,9 +175,9 @@ impl KernelConfig {
             use_bvh: buffers.bvh.is_some(),
             use_bins: buffers.bins.is_some(),
         };
-        // Only a ray tree or shadow rays multiply a pixel's loops; the rest is left to the
-        // accelerations' own bounds. The tree runs only for the colour image.
-        config.loop_canary = loop_limit && pixel_layout.outputs.contains(Output::Color) && config.secondary_rays();
+        // Every pixel, whatever it casts: a hierarchy that cannot cull (slivers across the
+        // view), a crowded bin or a flat loop passes the limit on primary rays alone.
+        config.loop_canary = loop_limit;
         config
     }
 

@@ -57,6 +57,8 @@ pub fn host_constants() -> String {
         ("PACKET", super::BIN_PACKET, "rays per invocation of main_bins (gpu::BIN_PACKET)"),
         ("REF_KIND_SHIFT", REF_KIND_SHIFT, "a reference is kind << REF_KIND_SHIFT | index"),
         ("TREE_STACK", super::tree::TREE_STACK, "rays waiting in a ray tree (gpu::tree::TREE_STACK)"),
+        ("CUT_SHORT_HIT", super::layout::CUT_SHORT_HIT, "hit word of a pixel cut short (gpu::layout)"),
+        ("CUT_SHORT_WORD", super::layout::CUT_SHORT_WORD, "first packed word of a pixel cut short (gpu::layout)"),
     ];
     for (name, value, what) in sizes {
         let _ = writeln!(out, "// {what}\nconst {name}: u32 = {value}u;");

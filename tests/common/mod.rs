@@ -55,6 +55,23 @@ pub fn gpu() -> Option<&'static GpuRenderer> {
     }
 }
 
+/// The float frame `gpu` renders, tile by tile, with its statistics (the pixels its driver
+/// cut short among them).
+pub fn render_gpu_tiles(
+    gpu: &GpuRenderer,
+    scene: &raycaster::scene::Scene,
+    options: &raycaster::render::RenderOptions,
+) -> (raycaster::render::Frame, raycaster::gpu::RenderStats) {
+    let mut frame = raycaster::render::Frame::new(options);
+    let stats = gpu
+        .render_tiles(scene, options, |first_row, tile| {
+            frame.paste(first_row, &tile);
+            Ok::<(), raycaster::gpu::GpuError>(())
+        })
+        .expect("the GPU renders the scene");
+    (frame, stats)
+}
+
 /// The GPU renderer on the same device, finding candidates as `acceleration` says.
 pub fn gpu_with(acceleration: raycaster::gpu::Acceleration) -> Option<GpuRenderer> {
     gpu()
