@@ -174,6 +174,61 @@ fn cases() -> Vec<Case> {
         (scene_text(&ortho(m), &sphere([2.0 * m, 0.0, -4.0 * m], 2.0 * m)), None)
     });
 
+    // Resolution (precision::MAX_RESOLUTION_*): R, the scene's distance from the camera over
+    // a pixel's footprint there, 10 % inside and outside each bound. The camera names it.
+    let perspective_r = |r: f64| {
+        // R = W·D/2 with D = 1/tan(angle/2); the view is 2·100/D wide at the object, 100 away.
+        let d = 2.0 * r / f64::from(SIZE);
+        ((2.0 * (1.0 / d).atan()).to_degrees(), 100.0 / d)
+    };
+    let angle =
+        || Expect::Refused { file: "scene.txt", line: 1, word: "PerspectiveCamera", what: "PerspectiveCamera angle" };
+    let (tri, smooth) = (precision::MAX_RESOLUTION_TRIANGLES, precision::MAX_RESOLUTION_SMOOTH);
+    add("narrow perspective, triangle", 0.9 * tri, 1.1 * tri, angle(), &|r| {
+        let (degrees, h) = perspective_r(r);
+        let corners = [[-0.61 * h, -0.52 * h, 0.0], [0.73 * h, -0.43 * h, 0.0], [0.11 * h, 0.67 * h, 0.0]];
+        (scene_text(&perspective(100.0, "0 0 -1", &n(degrees)), &triangle(corners)), None)
+    });
+    add("narrow perspective, sphere", 0.9 * smooth, 1.1 * smooth, angle(), &|r| {
+        let (degrees, h) = perspective_r(r);
+        (scene_text(&perspective(100.0, "0 0 -1", &n(degrees)), &sphere([0.13 * h, -0.07 * h, 0.0], 0.61 * h)), None)
+    });
+    let size_refused =
+        || Expect::Refused { file: "scene.txt", line: 1, word: "OrthographicCamera", what: "OrthographicCamera size" };
+    // R = M·W/size with M = 100, the triangle's distance: the size shrinks as R grows.
+    add("tiny orthographic camera, triangle", 0.9 * tri, 1.1 * tri, size_refused(), &|r| {
+        let size = 100.0 * f64::from(SIZE) / r;
+        let corners = [
+            [-0.31 * size, -0.26 * size, -100.0],
+            [0.37 * size, -0.21 * size, -100.0],
+            [0.06 * size, 0.33 * size, -100.0],
+        ];
+        (scene_text(&ortho(size), &triangle(corners)), None)
+    });
+    // A sphere of radius 0.45 seen through size 1 from M: R = M·W with M its far side.
+    add("sphere far away, orthographic", 0.9 * smooth, 1.1 * smooth, size_refused(), &|r| {
+        let far_side = r / f64::from(SIZE);
+        (scene_text(&ortho(1.0), &sphere([0.03, -0.02, -(far_side - 0.45)], 0.45)), None)
+    });
+    // Moved a million units away, camera and all: camera-relative, nothing changes.
+    cases.push(Case {
+        name: "sphere and camera moved by 1e6".into(),
+        scene: scene_text(
+            "PerspectiveCamera { center 1e6 1e6 1000005 direction 0 0 -1 up 0 1 0 angle 30 }",
+            &sphere([1e6, 1e6, 1e6], 1.0),
+        ),
+        obj: None,
+        expect: Expect::Faithful,
+    });
+    // The README's narrow camera: radius 3.5e-6 at 100 units through angle 1e-5 degrees, in
+    // range but R = 2.7e8: 1346 of 10 000 pixels were wrong before it was refused.
+    cases.push(Case {
+        name: "README's narrow camera".into(),
+        scene: scene_text(&perspective(100.0, "0 0 -1", "1e-5"), &sphere([0.0; 3], 3.5e-6)),
+        obj: None,
+        expect: angle(),
+    });
+
     // Exactly zero is in range: the camera on the plane sees it edge-on, in both backends.
     cases.push(Case {
         name: "plane through the camera".into(),
@@ -298,13 +353,15 @@ fn each_value_just_inside_renders_like_the_reference_and_just_outside_is_refused
     assert!(failures.is_empty(), "{failures:#?}");
 }
 
-/// No scene of ours or of the course is refused: the bound costs them nothing.
+/// No scene of ours or of the course is refused at the course's size, nor out of range at
+/// any size: the bounds cost them nothing. At 16384² a pixel is finer than f32 resolves
+/// for the narrowest cameras only, which are named here.
 #[test]
 fn every_project_and_course_scene_is_in_range() {
     let mut files = Vec::new();
     let mut dirs = vec![common::scenes_dir(), common::scenes_dir().join("hard")];
-    let course = common::corpus().map(|c| c.join("a2"));
-    dirs.extend(course.clone());
+    let course = common::corpus();
+    dirs.extend(course.iter().flat_map(|c| ["a2", "a3", "a4", "a5"].map(|a| c.join(a))));
     for dir in dirs {
         for entry in std::fs::read_dir(&dir).unwrap_or_else(|e| panic!("{}: {e}", dir.display())) {
             let path = entry.unwrap().path();
@@ -314,20 +371,31 @@ fn every_project_and_course_scene_is_in_range() {
         }
     }
     let mut checked = 0;
+    let mut too_fine_at_16384 = Vec::new();
     for path in &files {
         let Some((_meshes, scene)) = common::hard::load_listed(path) else { continue };
-        for (w, h) in [(200, 200), (16384, 16384), (1, 1)] {
-            precision::check(&scene, &RenderOptions::all(w, h)).unwrap_or_else(|e| panic!("{e}"));
+        for (w, h) in [(200, 200), (1, 1)] {
+            precision::check(&scene, &RenderOptions::all(w, h)).unwrap_or_else(|e| panic!("{w}x{h}: {e}"));
+        }
+        match precision::check(&scene, &RenderOptions::all(16384, 16384)) {
+            Ok(()) => {}
+            Err(e) if matches!(e.limit, precision::Limit::Resolution { .. }) => {
+                too_fine_at_16384.push(path.file_name().unwrap().to_str().unwrap().to_string())
+            }
+            Err(e) => panic!("16384x16384: {e}"),
         }
         checked += 1;
     }
-    // The folders were found and read: every scene of ours but one, and the course's 16.
+    // The folders were found and read: every scene of ours but one, and the course's
+    // 16 + 12 + 14 + 12.
     let expected = files.len() - 1;
     assert!(
-        checked == expected && expected >= 30 + if course.is_some() { 16 } else { 0 },
+        checked == expected && expected >= 30 + if course.is_some() { 54 } else { 0 },
         "{checked} of {} scenes checked",
         files.len()
     );
+    too_fine_at_16384.sort();
+    assert_eq!(too_fine_at_16384, ["far_sphere.txt"], "refused at 16384² for resolution");
 }
 
 /// `--backend gpu` refuses with the located one-line error and exit status 1, writing

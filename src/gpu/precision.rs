@@ -51,11 +51,29 @@
 //! underflow makes a term far below one 8-bit level, and a light's distance is a
 //! difference of positions.
 //!
-//! What this does not promise: relative precision. A sphere of radius 1 seen 2²⁸ units
-//! away is within range, but f32 cannot place its surface to better than 2⁴ units; the
-//! accuracy tests (`tests/hard_cases.rs`) measure how far that goes. It shows through very
-//! narrow perspective cameras (pixels off once `1/tan(angle/2)` times the longer image
-//! side exceeds about 2²², README "Single precision"), which this range check lets pass.
+//! # Resolution
+//!
+//! In range is not enough: f32 places a point only to within about 2⁻²⁴ of the magnitudes it
+//! was computed from, and the kernel must still tell neighbouring pixels apart. Everything
+//! is camera-relative, so the error at a primitive is about 2⁻²⁴·M for M its distance from
+//! the camera, and what matters is the ratio R of that distance to a pixel's footprint
+//! there:
+//!
+//! - perspective: a pixel spans d·2/(W·D) at distance d (W the longer image side, D =
+//!   1/tan(angle/2)), so R = W·D/2 wherever the primitive is (and the ray directions
+//!   themselves differ by 2/(W·D) relative from pixel to pixel);
+//! - orthographic: a pixel spans size/W everywhere, so R = M·W/size, with M the largest
+//!   camera-relative magnitude of a sphere or triangle point (or of the rays' origins).
+//!
+//! Past a bound on R the refusal is [`Limit::Resolution`]. The bounds are measured
+//! (`raycaster compare` at 200², pixels more than 1 level off the reference, same framing
+//! at each R): a bunny of 1000 triangles, perspective and orthographic alike, has 0 at 2¹⁸,
+//! 19–20 at 2¹⁹ and 226 at 2²⁰ (past the 0.1 % contract: its shared edges decide which
+//! normal a pixel shows); a sphere has 0 up to 2²³ and 65 at 2²⁴. So a scene with triangles
+//! may reach R = 2¹⁷ ([`MAX_RESOLUTION_TRIANGLES`]), one of spheres and planes 2²¹
+//! ([`MAX_RESOLUTION_SMOOTH`]), each 8 times below the first failure. Planes have no edge to
+//! misplace and do not count towards M. A primitive smaller than its own error (a sphere of
+//! radius 10⁻⁶ at 100 units) is distorted, but within the same fraction of a pixel.
 
 use crate::camera::PrimaryRays;
 use crate::render::RenderOptions;
@@ -69,6 +87,12 @@ pub const MIN_MAGNITUDE: f64 = 1.0 / 33_554_432.0;
 /// The largest magnitude the f32 kernel renders faithfully: 2²⁸.
 pub const MAX_MAGNITUDE: f64 = 268_435_456.0;
 
+/// The largest ratio R of the scene's distance from the camera to a pixel's footprint there
+/// that the f32 kernel resolves in a scene with triangles: 2¹⁷ (see the module's contract).
+pub const MAX_RESOLUTION_TRIANGLES: f64 = 131_072.0;
+/// The same for a scene of spheres and planes only: 2¹⁹.
+pub const MAX_RESOLUTION_SMOOTH: f64 = 524_288.0;
+
 /// A value the f32 kernel cannot render faithfully, and where it was written.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PrecisionError {
@@ -80,20 +104,42 @@ pub struct PrecisionError {
     /// What the value is, e.g. `Sphere radius`.
     pub what: String,
     /// Its magnitude, camera-relative and after transforms (NaN or infinite if f64 itself
-    /// overflowed computing it).
+    /// overflowed computing it); for [`Limit::Resolution`], the ratio R.
     pub magnitude: f64,
+    /// Which promise the value breaks.
+    pub limit: Limit,
+}
+
+/// The two halves of the contract (see the module's documentation).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Limit {
+    /// A magnitude outside [`MIN_MAGNITUDE`, `MAX_MAGNITUDE`].
+    Range,
+    /// A pixel finer than f32 resolves at the scene's distance: R above
+    /// [`MAX_RESOLUTION_TRIANGLES`] or [`MAX_RESOLUTION_SMOOTH`].
+    Resolution { triangles: bool },
 }
 
 impl fmt::Display for PrecisionError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write_place(f, &self.file, self.location)?;
-        write!(
-            f,
-            ": {}: magnitude {} is outside the range the GPU's f32 kernel renders faithfully \
-             (0 or 2^-25 to 2^28, with the camera at the origin)",
-            self.what,
-            show(self.magnitude)
-        )
+        match self.limit {
+            Limit::Range => write!(
+                f,
+                ": {}: magnitude {} is outside the range the GPU's f32 kernel renders faithfully \
+                 (0 or 2^-25 to 2^28, with the camera at the origin)",
+                self.what,
+                show(self.magnitude)
+            ),
+            Limit::Resolution { triangles } => write!(
+                f,
+                ": {}: a pixel spans 1/{} of the scene's distance from the camera, finer than the \
+                 GPU's f32 kernel resolves ({})",
+                self.what,
+                show(self.magnitude),
+                if triangles { "1/2^17 with triangles" } else { "1/2^19" }
+            ),
+        }
     }
 }
 
@@ -111,18 +157,17 @@ pub(super) fn write_place(f: &mut fmt::Formatter<'_>, file: &Path, location: Opt
 /// Whether the f32 kernel renders `scene` at `options` faithfully (see the module's
 /// contract); the first offending value in file order otherwise.
 pub fn check(scene: &Scene, options: &RenderOptions) -> Result<(), PrecisionError> {
-    let checker = Checker { scene: &scene.path };
-    {
-        let rays = PrimaryRays::for_camera(&scene.camera, options.width, options.height);
-        // Orthographic: `horizontal` is the basis vector times `size`; perspective: the
-        // direction is scaled by D = 1/tan(angle/2) and the extent is fixed (2).
-        let (what, extent) = if rays.orthographic {
-            ("OrthographicCamera size", rays.horizontal.length())
-        } else {
-            ("PerspectiveCamera 1/tan(angle/2)", rays.direction.length())
-        };
-        checker.scalar(Some(scene.camera.location), what, extent)?;
-    }
+    let checker =
+        Checker { scene: &scene.path, farthest: std::cell::Cell::new(0.0), triangles: std::cell::Cell::new(false) };
+    let rays = PrimaryRays::for_camera(&scene.camera, options.width, options.height);
+    // Orthographic: `horizontal` is the basis vector times `size`; perspective: the
+    // direction is scaled by D = 1/tan(angle/2) and the extent is fixed (2).
+    let (what, extent) = if rays.orthographic {
+        ("OrthographicCamera size", rays.horizontal.length())
+    } else {
+        ("PerspectiveCamera 1/tan(angle/2)", rays.direction.length())
+    };
+    checker.scalar(Some(scene.camera.location), what, extent)?;
     for (k, light) in scene.lights.iter().enumerate() {
         match light {
             Light::Directional(light) => checker.colour(&format!("DirectionalLight {} color", k + 1), light.color)?,
@@ -152,11 +197,38 @@ pub fn check(scene: &Scene, options: &RenderOptions) -> Result<(), PrecisionErro
         // A ratio of indices bends every refracted ray: both ends of the range matter.
         checker.scalar(at, &format!("Material {k} indexOfRefraction"), material.index_of_refraction)?;
     }
-    checker.objects(&scene.root, &DMat4::from_translation(-scene.camera.center))
+    checker.objects(&scene.root, &DMat4::from_translation(-scene.camera.center))?;
+    let longer_side = f64::from(options.width.max(options.height));
+    let resolution = if rays.orthographic {
+        // The rays start up to size/√2 from the camera; the primitives lie where they lie.
+        let size = extent;
+        checker.farthest.get().max(size / std::f64::consts::SQRT_2) * longer_side / size
+    } else {
+        // At distance d a pixel spans d·2/(W·D): R = W·D/2 wherever the primitive is.
+        longer_side * extent / 2.0
+    };
+    let triangles = checker.triangles.get();
+    if resolution <= if triangles { MAX_RESOLUTION_TRIANGLES } else { MAX_RESOLUTION_SMOOTH } {
+        return Ok(());
+    }
+    let what = if rays.orthographic { "OrthographicCamera size" } else { "PerspectiveCamera angle" };
+    Err(PrecisionError {
+        file: scene.path.clone(),
+        location: Some(scene.camera.location),
+        what: what.to_string(),
+        magnitude: resolution,
+        limit: Limit::Resolution { triangles },
+    })
 }
 
 struct Checker<'a> {
     scene: &'a Path,
+    /// The largest camera-relative magnitude of any point of a sphere or triangle seen so
+    /// far (planes have no place: their hits carry no edge to misplace).
+    farthest: std::cell::Cell<f64>,
+    /// Whether any triangle was seen: the edges a mesh's triangles share decide which
+    /// normal a pixel shows, so they need a finer resolution than silhouettes.
+    triangles: std::cell::Cell<bool>,
 }
 
 fn in_range(magnitude: f64) -> bool {
@@ -174,7 +246,18 @@ fn max_norm(v: DVec3) -> f64 {
 
 impl Checker<'_> {
     fn error(&self, location: Option<Location>, what: &str, magnitude: f64) -> PrecisionError {
-        PrecisionError { file: self.scene.to_path_buf(), location, what: what.to_string(), magnitude }
+        PrecisionError {
+            file: self.scene.to_path_buf(),
+            location,
+            what: what.to_string(),
+            magnitude,
+            limit: Limit::Range,
+        }
+    }
+
+    /// Notes a point's camera-relative magnitude, for the resolution.
+    fn reaches(&self, magnitude: f64) {
+        self.farthest.set(self.farthest.get().max(magnitude));
     }
 
     fn scalar(&self, location: Option<Location>, what: &str, value: f64) -> Result<(), PrecisionError> {
@@ -224,12 +307,18 @@ impl Checker<'_> {
                     self.scalar(Some(field(1)), "Plane offset from the camera", offset)
                 }
                 Shape::Triangle { vertices, .. } => {
+                    self.triangles.set(true);
                     for (k, v) in vertices.iter().enumerate() {
-                        self.vector(field(k), &format!("Triangle vertex{k}"), matrix.transform_point3(*v))?;
+                        let vertex = matrix.transform_point3(*v);
+                        self.reaches(max_norm(vertex));
+                        self.vector(field(k), &format!("Triangle vertex{k}"), vertex)?;
                     }
                     Ok(())
                 }
-                Shape::Mesh { mesh, .. } => self.mesh(object.location, matrix, mesh),
+                Shape::Mesh { mesh, .. } => {
+                    self.triangles.set(true);
+                    self.mesh(object.location, matrix, mesh)
+                }
                 Shape::Group(_) | Shape::Transform { .. } => Ok(()),
             }
         })
@@ -242,7 +331,9 @@ impl Checker<'_> {
         let [center_at, radius_at, scaled_at] = at;
         let linear = DMat3::from_mat4(*matrix);
         if let Some(scale) = super::flatten::similarity_scale(&linear) {
-            self.vector(center_at, "Sphere center", matrix.transform_point3(center))?;
+            let centre = matrix.transform_point3(center);
+            self.reaches(max_norm(centre) + radius * scale);
+            self.vector(center_at, "Sphere center", centre)?;
             let at = if scale == 1.0 { radius_at } else { scaled_at };
             return self.scalar(Some(at), "Sphere radius", radius * scale);
         }
@@ -250,6 +341,7 @@ impl Checker<'_> {
         let to_unit = to_world.inverse();
         self.vector(center_at, "transformed Sphere center", to_world.w_axis.truncate())?;
         let half = DVec3::from_array([0, 1, 2].map(|r| to_world.row(r).truncate().length()));
+        self.reaches(max_norm(to_world.w_axis.truncate()) + max_norm(half));
         self.vector(scaled_at, "transformed Sphere half-extent", half)?;
         let entries = DMat3::from_mat4(to_unit).to_cols_array();
         let largest = entries.iter().try_fold(0.0_f64, |m, e| (!e.is_nan()).then(|| m.max(e.abs())));
@@ -271,6 +363,7 @@ impl Checker<'_> {
         let vertices = mesh.positions.iter().zip(&used).enumerate().filter(|(_, (_, used))| **used);
         for (k, (position, _)) in vertices {
             let magnitude = max_norm(matrix.transform_point3(*position));
+            self.reaches(magnitude);
             if in_range(magnitude) {
                 continue;
             }
@@ -280,6 +373,7 @@ impl Checker<'_> {
                     location: Some(location),
                     what: format!("mesh vertex {}", k + 1),
                     magnitude,
+                    limit: Limit::Range,
                 },
                 None => self.error(
                     Some(at),
