@@ -306,6 +306,11 @@ pub struct RenderStats {
     pub scene_bytes: u64,
     /// How the kernel found candidates (never `Auto`: what the cost model chose).
     pub acceleration: Acceleration,
+    /// The course's statistics (`-stats`), where the renderer counted them: the reference
+    /// does; the kernel does not yet.
+    pub counted: Option<crate::render::RayStats>,
+    /// The box the `-grid` cells divide, where there was a grid.
+    pub grid_bounds: Option<crate::scene::Bounds>,
 }
 
 impl GpuRenderer {

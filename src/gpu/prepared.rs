@@ -102,6 +102,8 @@ impl<'a> PreparedScene<'a> {
                 scene_bytes,
                 acceleration: buffers.acceleration(),
                 pixels_cut_short: 0,
+                counted: None,
+                grid_bounds: None,
             },
             fallback: config.loop_canary.then(|| scene.clone()),
         })
