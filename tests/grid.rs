@@ -415,7 +415,7 @@ const TEXTURED: [&str; 6] = [
 /// Every line of the course's A5 and A6 `commands.txt`, as written (the default backend),
 /// inside a copy of its folder: each exits 0 and writes the image its `-output` names; the
 /// lines with `-stats` print the block on stdout. A5's `-gui` lines without `-output` write
-/// nothing, as the course's window shows only.
+/// nothing, as the course's window shows only. Then each file as one `batch`.
 #[test]
 fn the_course_lines_of_assignments_5_and_6_run() {
     let Some(corpus) = common::corpus() else { return };
@@ -434,5 +434,17 @@ fn the_course_lines_of_assignments_5_and_6_run() {
             let stdout = String::from_utf8_lossy(&result.stdout);
             assert_eq!(command.contains(&"-stats".to_string()), stdout.contains("RAY TRACING STATISTICS"));
         }
+        // The same lines as one batch: only the textured ones fail, each with its scene's
+        // located error.
+        let batch = raycaster_in(dir.path(), &["batch", "commands.txt"]);
+        let failed: Vec<usize> =
+            lines.iter().enumerate().filter(|(_, c)| TEXTURED.contains(&c[1].as_str())).map(|(k, _)| k + 1).collect();
+        let said = stderr(&batch);
+        assert_eq!(batch.status.success(), failed.is_empty(), "{folder}: {said}");
+        for line in &failed {
+            assert!(said.contains(&format!("commands.txt:{line}: scene6_")), "{folder}:{line}: {said}");
+        }
+        let failures = said.lines().filter(|l| l.contains("unknown material")).count();
+        assert_eq!(failures, failed.len(), "{folder}: {said}");
     }
 }
