@@ -6,7 +6,9 @@
 //! The grid knows nothing of primitives: its user hands it one [`Footprint`] per item and
 //! gets back, per cell, the indices of the items whose footprint touches the cell, in
 //! increasing order. The CPU reference ([`crate::cpu`]) builds one over the scene's bounded
-//! primitives (planes stay outside, always tested).
+//! primitives (planes stay outside, always tested), and the GPU's host one over its f32
+//! primitives (`gpu::flatten::GpuGrid`), which the kernel walks with its own f32 march
+//! (shaders/grid.wgsl); this march is the reference's only.
 //!
 //! **Conservative by a margin.** A ray that hits an item at `t` must meet, at `t`, a cell
 //! that lists the item, or a grid-accelerated search would miss the hit. The hit point is

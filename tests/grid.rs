@@ -363,11 +363,69 @@ fn grid_flags_are_checked() {
     assert!(count.status.success() && out.exists(), "{}", stderr(&count));
 }
 
-/// The GPU has no grid and counts nothing yet: `--backend gpu` refuses each of the three
-/// flags by name (status 1, nothing written), and `auto` renders with the reference after one
-/// warning line, the reference's image.
+/// The kernel's grid (shaders/grid.wgsl) against the reference's, on every A6 scene this
+/// branch parses, with the course's grid and the heaviest shading of its lines (shadows,
+/// 5 bounces): the parity contract, at most 0.1 % of each output's pixels more than one
+/// level apart.
 #[test]
-fn the_gpu_refuses_grid_flags_and_auto_falls_back() {
+fn the_gpu_grid_agrees_with_the_reference() {
+    let (Some(corpus), Some(gpu)) = (common::corpus(), common::gpu()) else { return };
+    let mut report = Vec::new();
+    for (name, cells) in A6_GRIDS {
+        let scene = load_scene(&corpus.join("a6").join(name)).unwrap();
+        let shading = Shading { shadows: true, shade_back: true, bounces: 5, weight: 0.01, ..Shading::default() };
+        let options = RenderOptions { shading, grid: Some(size_of(cells)), ..RenderOptions::all(100, 100) };
+        let ours = gpu.render(&scene, &options).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let reference = raycaster::cpu::render(&scene, &options);
+        let range = raycaster::metrics::depth_range_of(&reference);
+        for errors in raycaster::metrics::compare_frames(&ours, &reference, range) {
+            let off = errors.image.off_by_more_than_one;
+            report.push(format!(
+                "{name} {}: {off} of {} off by more than 1",
+                errors.output.name(),
+                errors.image.pixels
+            ));
+            assert!(off * 1000 <= errors.image.pixels, "{}", report.last().unwrap());
+            assert_eq!(errors.non_finite, 0, "{name}");
+        }
+    }
+    println!("{}", report.join("\n"));
+}
+
+/// On a driver that ends long loops (lavapipe), a grid whose march could outrun the limit
+/// is refused by name where no pixel can be marked cut short (no colour image), and `auto`
+/// hands it to the reference; with the colour image the kernel renders and checks it.
+#[test]
+fn a_march_longer_than_the_loop_limit_is_refused_without_colour() {
+    let (Some(corpus), Some(gpu)) = (common::corpus(), common::gpu()) else { return };
+    let scene = load_scene(&corpus.join("a6/scene6_07_bunny_mesh_40k.txt")).unwrap();
+    let depth_only = RenderOptions {
+        outputs: raycaster::render::Output::Depth.into(),
+        grid: Some(GridSize { nx: 1, ny: 1, nz: 1 }),
+        ..RenderOptions::all(8, 8)
+    };
+    match (gpu.loop_limit(), gpu.render(&scene, &depth_only)) {
+        (Some(_), Err(raycaster::gpu::GpuError::Unsupported(e))) => {
+            assert!(e.what.starts_with("-grid 1 1 1: a ray may take up to 120003 steps"), "{e}")
+        }
+        (None, Ok(_)) => {}
+        (limit, result) => panic!("loop limit {limit:?}: {:?}", result.err()),
+    }
+    let with_colour = RenderOptions { outputs: raycaster::render::Outputs::ALL, ..depth_only };
+    let ours = gpu.render(&scene, &with_colour).unwrap();
+    let reference = raycaster::cpu::render(&scene, &with_colour);
+    let range = raycaster::metrics::depth_range_of(&reference);
+    for errors in raycaster::metrics::compare_frames(&ours, &reference, range) {
+        assert!(errors.image.off_by_more_than_one == 0, "{errors:?}");
+    }
+}
+
+/// The GPU draws no voxels and counts nothing yet: `--backend gpu` refuses each of
+/// `-visualize_grid` and `-stats` by name (status 1, nothing written), and `auto` renders
+/// with the reference after one warning line, the reference's image. `-grid` alone it
+/// renders itself.
+#[test]
+fn the_gpu_refuses_voxels_and_stats_and_auto_falls_back() {
     if common::gpu().is_none() {
         return;
     }
@@ -378,9 +436,13 @@ fn the_gpu_refuses_grid_flags_and_auto_falls_back() {
         let base = ["-input", path_str(&scene), "-size", "1500", "1500", "-output", image, "--backend", backend];
         raycaster_in(dir.path(), &[&base[..], extra].concat())
     };
-    let refusals: [(&[&str], &str); 3] = [
-        (&["-grid", "3", "3", "3"], "-grid 3 3 3: the GPU kernel has no grid yet"),
-        (&["-grid", "3", "3", "3", "-visualize_grid"], "-visualize_grid: the GPU kernel has no grid to draw yet"),
+    let grid = run("gpu", "grid.tga", &["-grid", "3", "3", "3"]);
+    assert!(grid.status.success() && grid.stderr.is_empty(), "{}", stderr(&grid));
+    let refusals: [(&[&str], &str); 2] = [
+        (
+            &["-grid", "3", "3", "3", "-visualize_grid"],
+            "-visualize_grid: the GPU kernel does not draw the grid's cells yet",
+        ),
         (&["-stats"], "-stats: the GPU kernel does not count rays, tests or cells yet"),
     ];
     for (extra, reason) in refusals {

@@ -77,6 +77,8 @@ pub enum Acceleration {
     Hierarchy,
     /// Every primitive for every ray.
     Flat,
+    /// The uniform grid `-grid` asks for (docs/SPEC.md §7); never chosen otherwise.
+    Grid,
 }
 
 impl Acceleration {
@@ -86,6 +88,7 @@ impl Acceleration {
             Acceleration::Bins => "bins",
             Acceleration::Hierarchy => "hierarchy",
             Acceleration::Flat => "flat",
+            Acceleration::Grid => "grid",
         }
     }
 }
@@ -141,6 +144,7 @@ pub struct KernelConfig {
     pub sphere_test: SphereTest,
     pub use_bvh: bool,
     pub use_bins: bool,
+    pub use_grid: bool,
 }
 
 impl KernelConfig {
@@ -174,10 +178,14 @@ impl KernelConfig {
             sphere_test: options.sphere_test,
             use_bvh: buffers.bvh.is_some(),
             use_bins: buffers.bins.is_some(),
+            use_grid: buffers.grid.is_some(),
         };
         // Only a ray tree or shadow rays multiply a pixel's loops; the rest is left to the
         // accelerations' own bounds. The tree runs only for the colour image.
-        config.loop_canary = loop_limit && pixel_layout.outputs.contains(Output::Color) && config.secondary_rays();
+        // A grid's march is bounded by its cells and their lists, which no one bounds in
+        // advance: it is checked like a ray tree.
+        config.loop_canary =
+            loop_limit && pixel_layout.outputs.contains(Output::Color) && (config.secondary_rays() || config.use_grid);
         config
     }
 
@@ -206,7 +214,7 @@ impl KernelConfig {
     }
 
     /// The values for `PipelineCompilationOptions::constants`.
-    pub fn constants(&self) -> [(&'static str, f64); 22] {
+    pub fn constants(&self) -> [(&'static str, f64); 23] {
         let b = |v: bool| if v { 1.0 } else { 0.0 };
         [
             ("HAS_SPHERES", b(self.has_spheres)),
@@ -231,6 +239,7 @@ impl KernelConfig {
             ("SPHERE_TEST", self.sphere_test as u32 as f64),
             ("USE_BVH", b(self.use_bvh)),
             ("USE_BINS", b(self.use_bins)),
+            ("USE_GRID", b(self.use_grid)),
         ]
     }
 }
