@@ -79,6 +79,9 @@ fn closest_hit(ray: Ray, tmin: f32) -> Closest {
     var best = closest_plane(ray, tmin);
     // Only the watertight test reads the shear; otherwise the compiler drops it.
     let shear = shear_for(ray.direction);
+    if (USE_GRID) {
+        return grid_closest(ray, shear, tmin, best);
+    }
     if (USE_BVH) {
         return traverse(ray, shear, tmin, best);
     }

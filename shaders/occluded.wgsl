@@ -15,6 +15,9 @@ fn occluded(ray: Ray, tmin: f32, tmax: f32) -> bool {
         }
     }
     let shear = shear_for(ray.direction);
+    if (USE_GRID) {
+        return grid_any(ray, shear, tmin, tmax);
+    }
     if (USE_BVH) {
         return traverse_any(ray, shear, tmin, tmax);
     }

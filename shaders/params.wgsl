@@ -61,6 +61,9 @@ const SPHERE_ROBUST: u32 = 1u;
 // (gpu::binning); else flat loops over each kind.
 override USE_BVH: bool = false;
 override USE_BINS: bool = false;
+// Finite primitives through the -grid's cells (shaders/grid.wgsl), which reuse the bins'
+// bindings: bin_ranges holds each cell's (first, count) in prim_refs.
+override USE_GRID: bool = false;
 
 const F32_MAX: f32 = 3.40282347e38;
 // The "no hit" distance: never less than any closest-so-far, and what a Closest holds
@@ -91,8 +94,13 @@ struct Params {
     loop_canary_trips: u32,
     // -weight: no secondary ray whose weight falls below it.
     weight: f32,
+    // The -grid (USE_GRID): cells along each axis, the box's corner, one cell's extent.
+    grid_nx: u32,
+    grid_ny: u32,
+    grid_min: vec3<f32>,
+    grid_nz: u32,
+    grid_cell: vec3<f32>,
     _pad0: u32,
-    _pad1: u32,
 }
 
 // A sphere in world space (a similarity transform was baked into it).

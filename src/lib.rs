@@ -28,6 +28,7 @@ pub mod bvh;
 pub mod camera;
 pub mod cpu;
 pub mod gpu;
+pub mod grid;
 pub mod image_io;
 pub mod metrics;
 pub mod render;

@@ -75,6 +75,10 @@ fn render(args: &RenderArgs, habits: Habits) -> Result<(), Failure> {
     if habits.verbosity == Verbosity::Verbose {
         notice(&report.verbose_lines(&backend, args));
     }
+    if args.stats {
+        let seconds = (report.render_ms + report.write_ms) / 1e3;
+        exit::print(&app::job::stats_text(args, &report.stats, seconds))?;
+    }
     Ok(())
 }
 
@@ -111,6 +115,10 @@ fn batch(file: &std::path::Path, choice: BackendChoice, shard: Option<Split>, ha
                     timings.push(located(line, &report))
                 }
                 LineReport::Rendered { .. } => {}
+                // The course prints its statistics on stdout; nothing else goes there.
+                LineReport::Stats(text) => {
+                    let _ = exit::print(&text);
+                }
                 _ => say(&located(line, &report)),
             },
         );

@@ -4,6 +4,8 @@
 //! be compared on the numbers themselves, and [`crate::image_io`] turns a frame into the
 //! 8-bit images of docs/SPEC.md §5 the same way for both.
 
+use crate::grid::GridSize;
+
 /// One of the images a render makes (docs/SPEC.md §5).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum Output {
@@ -110,6 +112,34 @@ pub struct RenderOptions {
     pub triangle_test: TriangleTest,
     /// The GPU kernel's ray/sphere algorithm (the reference always uses its f64 quadratic).
     pub sphere_test: SphereTest,
+    /// `-grid nx ny nz`: find candidates through a uniform grid (docs/SPEC.md §7). An
+    /// explicit grid means the grid: a backend that has none refuses the render.
+    pub grid: Option<GridSize>,
+    /// `-visualize_grid`: render the grid's occupied cells instead of the objects.
+    pub visualize_grid: bool,
+    /// `-stats`: count the course's statistics ([`RayStats`]).
+    pub stats: bool,
+}
+
+/// The course's `RayTracingStats` (assignment 6): what a render counted.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RayStats {
+    /// Primary, reflected and refracted rays (the course's `TraceRay` calls).
+    pub non_shadow_rays: u64,
+    pub shadow_rays: u64,
+    /// Ray–primitive tests, a mesh's triangles one by one.
+    pub intersections: u64,
+    /// Grid cells the 3D-DDA entered.
+    pub cells_traversed: u64,
+}
+
+impl RayStats {
+    pub fn add(&mut self, other: &RayStats) {
+        self.non_shadow_rays += other.non_shadow_rays;
+        self.shadow_rays += other.shadow_rays;
+        self.intersections += other.intersections;
+        self.cells_traversed += other.cells_traversed;
+    }
 }
 
 /// Ray/triangle algorithms the kernel can be compiled with.
@@ -168,6 +198,9 @@ impl RenderOptions {
             shading: Shading::default(),
             triangle_test: TriangleTest::default(),
             sphere_test: SphereTest::default(),
+            grid: None,
+            visualize_grid: false,
+            stats: false,
         }
     }
 

@@ -72,6 +72,11 @@ fn host_structs_match_the_shader() {
             ("num_triangles", offset_of!(Params, num_triangles)),
             ("loop_canary_trips", offset_of!(Params, loop_canary_trips)),
             ("weight", offset_of!(Params, weight)),
+            ("grid_nx", offset_of!(Params, grid_nx)),
+            ("grid_ny", offset_of!(Params, grid_ny)),
+            ("grid_min", offset_of!(Params, grid_min)),
+            ("grid_nz", offset_of!(Params, grid_nz)),
+            ("grid_cell", offset_of!(Params, grid_cell)),
         ],
     );
     check(
@@ -231,6 +236,7 @@ fn override_constants_match_the_host() {
         sphere_test: SphereTest::Robust,
         use_bvh: false,
         use_bins: false,
+        use_grid: false,
     };
     let mut host: Vec<String> = config.constants().iter().map(|(name, _)| name.to_string()).collect();
     host.sort();

@@ -2,6 +2,7 @@
 //! the rest of the command reads. A leaf: it imports nothing of the app's, so every other
 //! module can depend on it.
 
+use raycaster::grid::GridSize;
 use raycaster::render::{Output, Outputs, Shading, SphereTest, TriangleTest};
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -86,6 +87,12 @@ pub struct RenderArgs {
     pub sphere_test: SphereTest,
     /// `--tile K/N`: render band K of N and write part files (see [`crate::app::part`]).
     pub tile: Option<Split>,
+    /// `-grid NX NY NZ`.
+    pub grid: Option<GridSize>,
+    /// `-visualize_grid` (or `-visualize_grid_count`); only with a grid.
+    pub visualize_grid: bool,
+    /// `-stats`: print the course's statistics after the render.
+    pub stats: bool,
 }
 
 /// The files of `-output`, `-normals` and `-depth MIN MAX`.

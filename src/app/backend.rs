@@ -198,6 +198,8 @@ fn reference_band<E>(
         on_tile(first_row, reference.rows(first_row, rows))?;
         stats.tiles += 1;
     }
+    stats.counted = Some(reference.stats());
+    stats.grid_bounds = reference.grid().map(|g| g.grid.bounds).filter(|b| !b.is_empty());
     Ok(stats)
 }
 

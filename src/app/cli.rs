@@ -11,6 +11,7 @@ use crate::app::args::{
     MAX_PIXELS, MAX_SIDE,
 };
 use crate::app::flags::{self, flag_name, Answer, Flag, Given, Takes, Verb};
+use raycaster::grid::GridSize;
 use raycaster::render::{Output, Outputs};
 use std::ffi::OsString;
 use std::path::PathBuf;
@@ -143,7 +144,13 @@ fn render_or_compare(verb: Verb, given: Given) -> Result<Command, UsageError> {
         triangle_test: given.triangle_test,
         sphere_test: given.sphere_test,
         tile: given.tile,
+        grid: given.grid,
+        visualize_grid: given.visualize_grid,
+        stats: given.stats,
     };
+    if args.visualize_grid && args.grid.is_none() {
+        return Err(UsageError("-visualize_grid draws the grid's cells: give -grid NX NY NZ too".into()));
+    }
     if verb == Verb::Render {
         // `-gui` alone asks for the course's window only: nothing to render, not an error.
         if named.is_empty() && !given.gui {
@@ -220,6 +227,7 @@ impl<'a> Values<'a> {
             Takes::Size(set) => set(given, self.size(text)?),
             Takes::Depth(set) => set(given, self.depth(text)?),
             Takes::Steps(set) => set(given, self.steps(text)?),
+            Takes::Cells(set) => set(given, self.cells(text)?),
             Takes::Choice { names, set } => set(given, self.choice(text, &names())?),
             Takes::Real { what, set } => set(given, self.real(text, what)?),
             Takes::Number { what, min, max, set } => set(given, self.number(text, what, *min, *max)?),
@@ -258,8 +266,18 @@ impl<'a> Values<'a> {
         self.two_whole(flag, "two numbers of steps: THETA PHI", 1..=u32::MAX, "of steps, 1 or more")
     }
 
-    /// Two whole numbers in `range` (`what` names them where they are missing; `range_text`
-    /// says the range where one is not in it).
+    /// `-grid NX NY NZ`: three whole numbers ≥ 1, at most [`GridSize::MAX_CELLS`] cells.
+    fn cells(&mut self, flag: &str) -> Result<GridSize, UsageError> {
+        let what = "three numbers of cells: NX NY NZ";
+        let [nx, ny, nz] = self.whole_numbers(flag, what, 1..=u32::MAX, "of cells, 1 or more")?;
+        let size = GridSize { nx, ny, nz };
+        if size.cells() > GridSize::MAX_CELLS {
+            return Err(UsageError(format!("{flag} {nx} {ny} {nz}: more than {} cells", GridSize::MAX_CELLS)));
+        }
+        Ok(size)
+    }
+
+    /// Two whole numbers in `range` (see [`Self::whole_numbers`]).
     fn two_whole(
         &mut self,
         flag: &str,
@@ -267,16 +285,33 @@ impl<'a> Values<'a> {
         range: std::ops::RangeInclusive<u32>,
         range_text: &str,
     ) -> Result<(u32, u32), UsageError> {
-        let first = self.take(flag, what)?;
-        let second = self.take(flag, what)?;
-        let whole = |v: &OsString| -> Result<u32, UsageError> {
+        let [first, second] = self.whole_numbers(flag, what, range, range_text)?;
+        Ok((first, second))
+    }
+
+    /// `N` whole numbers in `range` (`what` names them where they are missing; `range_text`
+    /// says the range where one is not in it). All are taken before any is checked, so that
+    /// a missing one is reported as missing.
+    fn whole_numbers<const N: usize>(
+        &mut self,
+        flag: &str,
+        what: &str,
+        range: std::ops::RangeInclusive<u32>,
+        range_text: &str,
+    ) -> Result<[u32; N], UsageError> {
+        let mut values = Vec::with_capacity(N);
+        for _ in 0..N {
+            values.push(self.take(flag, what)?);
+        }
+        let mut numbers = [0; N];
+        for (number, v) in numbers.iter_mut().zip(&values) {
             let text = v.to_string_lossy();
-            match text.parse::<u32>() {
-                Ok(n) if range.contains(&n) => Ok(n),
-                _ => Err(UsageError(format!("{flag}: '{text}' is not a whole number {range_text}"))),
-            }
-        };
-        Ok((whole(&first)?, whole(&second)?))
+            *number = match text.parse::<u32>() {
+                Ok(n) if range.contains(&n) => n,
+                _ => return Err(UsageError(format!("{flag}: '{text}' is not a whole number {range_text}"))),
+            };
+        }
+        Ok(numbers)
     }
 
     fn depth(&mut self, flag: &str) -> Result<DepthArgs, UsageError> {

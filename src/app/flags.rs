@@ -4,6 +4,7 @@
 //! this table, so a flag is added, renamed or documented in one place.
 
 use crate::app::args::{BackendChoice, DepthArgs, OutputPaths, Split, UsageError, Verbosity, MAX_THREADS};
+use raycaster::grid::GridSize;
 use raycaster::render::{Outputs, Shading, SphereTest, TriangleTest};
 use std::path::PathBuf;
 
@@ -95,6 +96,12 @@ pub struct Given {
     pub corpus: Option<PathBuf>,
     pub only: Option<String>,
     pub threads: Option<usize>,
+    /// `-grid NX NY NZ`.
+    pub grid: Option<GridSize>,
+    /// `-visualize_grid` or `-visualize_grid_count`.
+    pub visualize_grid: bool,
+    /// `-stats`.
+    pub stats: bool,
 }
 
 /// A flag that answers the command line by itself, whatever else it holds.
@@ -118,6 +125,8 @@ pub enum Takes {
     Depth(fn(&mut Given, DepthArgs)),
     /// Two whole numbers ≥ 1 (`-tessellation THETA PHI`).
     Steps(fn(&mut Given, (u32, u32))),
+    /// Three whole numbers ≥ 1, at most [`GridSize::MAX_CELLS`] in product (`-grid`).
+    Cells(fn(&mut Given, GridSize)),
     /// One of `names()`; the setter gets its index.
     Choice {
         names: fn() -> Vec<&'static str>,
@@ -150,7 +159,7 @@ impl Takes {
     /// Whether it takes more than one value. Those cannot be glued on with `=`:
     /// `-size=200 200` would read as if the second value belonged to no flag.
     pub fn several_values(&self) -> bool {
-        matches!(self, Takes::Size(_) | Takes::Depth(_) | Takes::Steps(_))
+        matches!(self, Takes::Size(_) | Takes::Depth(_) | Takes::Steps(_) | Takes::Cells(_))
     }
 }
 
@@ -230,6 +239,16 @@ pub static FLAGS: &[Flag] = &[
         .help("sphere facets of the OpenGL preview: accepted, ignored"),
     Flag::course("gouraud", "", Takes::Switch(|g| g.preview = true), RENDER_VERBS)
         .help("smooth spheres in the OpenGL preview: accepted, ignored"),
+    Flag::course("grid", "NX NY NZ", Takes::Cells(|g, size| g.grid = Some(size)), RENDER_VERBS).help(
+        "a uniform grid of NX×NY×NZ cells over the scene's bounds (planes\n\
+         outside it) through which every ray finds what it hits",
+    ),
+    Flag::course("visualize_grid", "", Takes::Switch(|g| g.visualize_grid = true), RENDER_VERBS)
+        .help("render the grid's occupied cells as boxes, coloured by how many\nprimitives each holds"),
+    Flag::course("visualize_grid_count", "", Takes::Switch(|g| g.visualize_grid = true), RENDER_VERBS)
+        .help("the course's optional count colouring: the same as -visualize_grid"),
+    Flag::course("stats", "", Takes::Switch(|g| g.stats = true), Verbs::of(&[Render]))
+        .help("print the course's ray tracing statistics on stdout at the end"),
     Flag::ours("specular_fix", "", Takes::Switch(|g| g.shading.specular_fix = true), RENDER_VERBS).help(
         "the handout's optional specular fix: the specular term times\n\
          N·L",

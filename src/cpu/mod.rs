@@ -13,15 +13,15 @@ mod intersect;
 mod prepared;
 
 pub use intersect::{intersect_plane, intersect_sphere, intersect_triangle, sphere_normal, triangle_normal};
-pub use prepared::{Hit, ReferenceScene, Surface};
+pub use prepared::{Hit, ReferenceScene, SceneGrid, Surface};
 // `refract` is defined below and public for the analytic tests.
 
 use crate::camera::{PrimaryRays, Ray};
-use crate::render::{Frame, Output, Pixel, RenderOptions};
+use crate::render::{Frame, Output, Pixel, RayStats, RenderOptions};
 use crate::scene::{Light, Material, Scene};
 use glam::DVec3;
 use rayon::prelude::*;
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::Mutex;
 
 /// Renders `scene` with the f64 reference.
 pub fn render(scene: &Scene, options: &RenderOptions) -> Frame {
@@ -47,25 +47,35 @@ pub struct Reference<'a> {
     prepared: ReferenceScene<'a>,
     rays: PrimaryRays,
     options: RenderOptions,
-    /// Rays traced so far: primary, reflected, refracted and shadow rays.
-    traced: AtomicU64,
+    /// What the renders so far counted (rays, tests, cells), summed once per pixel.
+    stats: Mutex<RayStats>,
 }
 
 impl<'a> Reference<'a> {
     pub fn new(scene: &'a Scene, options: &RenderOptions) -> Reference<'a> {
         let rays = PrimaryRays::for_camera(&scene.camera, options.width, options.height);
-        Reference { prepared: ReferenceScene::new(scene), rays, options: *options, traced: AtomicU64::new(0) }
+        let prepared = match options.grid {
+            Some(size) => ReferenceScene::with_grid(scene, size),
+            None => ReferenceScene::new(scene),
+        };
+        Reference { prepared, rays, options: *options, stats: Mutex::new(RayStats::default()) }
     }
 
     /// How many rays the renders so far traced: one per pixel, plus every reflected,
     /// refracted and shadow ray (`bench` counts rays per second by it).
     pub fn rays_traced(&self) -> u64 {
-        self.traced.load(Ordering::Relaxed)
+        let stats = self.stats();
+        stats.non_shadow_rays + stats.shadow_rays
     }
 
-    /// Counts `n` rays about to be traced.
-    fn count(&self, n: u64) {
-        self.traced.fetch_add(n, Ordering::Relaxed);
+    /// What the renders so far counted: the course's statistics (`-stats`).
+    pub fn stats(&self) -> RayStats {
+        *self.stats.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// The grid's cells, when the render has a grid.
+    pub fn grid(&self) -> Option<&SceneGrid> {
+        self.prepared.grid()
     }
 
     /// Image rows `first_row .. first_row + rows` (from the top) as a frame of full rows.
@@ -88,24 +98,57 @@ impl<'a> Reference<'a> {
         pixels
             .par_iter()
             .map(|&(i, row)| {
+                let mut stats = RayStats::default();
                 // Image rows run from the top; the camera's j runs from the bottom (§3).
-                self.pixel(i, self.options.height - 1 - row)
+                let pixel = self.pixel(i, self.options.height - 1 - row, &mut stats);
+                self.stats.lock().unwrap_or_else(|e| e.into_inner()).add(&stats);
+                pixel
             })
             .collect()
     }
 
     /// Pixel (i from the left, j from the bottom): the kernel's stages, in its order.
-    fn pixel(&self, i: u32, j: u32) -> Pixel {
+    fn pixel(&self, i: u32, j: u32, stats: &mut RayStats) -> Pixel {
         let ray = self.primary_ray(i, j); // §3
-        self.count(1);
-        let hit = self.prepared.closest_hit(&ray); // §4
+        stats.non_shadow_rays += 1;
+        if let Some(grid) = self.prepared.grid().filter(|_| self.options.visualize_grid) {
+            return self.voxel_pixel(grid, &ray, stats); // §7
+        }
+        let hit = self.prepared.closest_hit_counted(&ray, stats); // §4
         let surface = hit.map(|hit| self.prepared.surface_at(&hit, &ray)); // §4
         let color = match (&surface, self.options.outputs.contains(Output::Color)) {
             (_, false) => DVec3::ZERO,
             (None, true) => self.prepared.scene.background.color, // §5: a miss
-            (Some(surface), true) => self.shade(surface, &ray, Path::PRIMARY), // §5
+            (Some(surface), true) => self.shade(surface, &ray, Path::PRIMARY, stats), // §5
         };
         write_pixel(surface.as_ref(), color) // §5
+    }
+
+    /// docs/SPEC.md §7, `-visualize_grid`: the first cell the 3D-DDA finds occupied, seen as
+    /// an opaque box: its depth where the ray enters it, the normal of the face it enters
+    /// through, and [`voxel_color`] shaded by the scene's lights (ambient and diffuse, no
+    /// shadow).
+    fn voxel_pixel(&self, grid: &SceneGrid, ray: &Ray, stats: &mut RayStats) -> Pixel {
+        let scene = self.prepared.scene;
+        for visit in grid.grid.march(ray.origin, ray.direction, ray.t_min, ray.t_max) {
+            stats.cells_traversed += 1;
+            let count = grid.grid.items(visit.cell).len();
+            if count == 0 {
+                continue;
+            }
+            // A ray that starts inside an occupied cell sees the face behind its start.
+            let normal = visit.entered_through.unwrap_or_else(|| facing_face(ray.direction));
+            let point = ray.at(visit.t_enter);
+            let material = Material::diffuse(voxel_color(count));
+            let mut color = scene.background.ambient * material.diffuse;
+            for light in &scene.lights {
+                let (to_light, light_color) = light_from(light, point);
+                color += local(&material, normal, to_light, light_color, -ray.direction, false);
+            }
+            let surface = Surface { t: visit.t_enter, point, normal, object_point: point, material: 0 };
+            return write_pixel(Some(&surface), color);
+        }
+        write_pixel(None, scene.background.color)
     }
 
     /// docs/SPEC.md §3: the ray through the pixel's centre, with the camera's interval.
@@ -114,11 +157,11 @@ impl<'a> Reference<'a> {
     }
 
     /// The colour seen along a secondary ray: what it hits, shaded, or the background.
-    fn trace(&self, ray: &Ray, path: Path) -> DVec3 {
-        self.count(1);
-        match self.prepared.closest_hit(ray) {
+    fn trace(&self, ray: &Ray, path: Path, stats: &mut RayStats) -> DVec3 {
+        stats.non_shadow_rays += 1;
+        match self.prepared.closest_hit_counted(ray, stats) {
             None => self.prepared.scene.background.color,
-            Some(hit) => self.shade(&self.prepared.surface_at(&hit, ray), ray, path),
+            Some(hit) => self.shade(&self.prepared.surface_at(&hit, ray), ray, path, stats),
         }
     }
 
@@ -127,7 +170,7 @@ impl<'a> Reference<'a> {
     /// Blinn–Torrance specular lobe, plus the reflected and refracted rays' colours while
     /// `path` may go deeper; a back-facing hit is black unless `shade_back`, which shades it
     /// with the normal turned towards the viewer.
-    fn shade(&self, surface: &Surface, ray: &Ray, path: Path) -> DVec3 {
+    fn shade(&self, surface: &Surface, ray: &Ray, path: Path, stats: &mut RayStats) -> DVec3 {
         let facing = ray.direction.dot(surface.normal);
         let entering = facing < 0.0;
         let mut normal = surface.normal;
@@ -141,18 +184,7 @@ impl<'a> Reference<'a> {
         let material = self.prepared.material(surface.material);
         let mut color = scene.background.ambient * material.diffuse;
         for light in &scene.lights {
-            let (to_light, light_color) = match light {
-                Light::Directional(light) => (-light.direction.normalize(), light.color),
-                Light::Point(light) => {
-                    let offset = light.position - surface.point;
-                    let d = offset.length();
-                    let [a0, a1, a2] = light.attenuation.to_array();
-                    // The parser makes the coefficients ≥ 0 and not all 0: the divisor is
-                    // positive for d > 0; at the light itself it is kept from reaching 0.
-                    let divisor = (a0 + a1 * d + a2 * d * d).max(f64::MIN_POSITIVE);
-                    (offset / d, light.color / divisor)
-                }
-            };
+            let (to_light, light_color) = light_from(light, surface.point);
             // A light behind the surface adds nothing (§5), so it needs no shadow ray.
             if self.options.shading.shadows && to_light.dot(normal) > 0.0 {
                 let origin = spawn_origin(surface.point, normal, to_light);
@@ -160,8 +192,8 @@ impl<'a> Reference<'a> {
                 if let Light::Point(light) = light {
                     shadow.t_max = (light.position - origin).length();
                 }
-                self.count(1);
-                if self.prepared.occluded(&shadow) {
+                stats.shadow_rays += 1;
+                if self.prepared.occluded_counted(&shadow, stats) {
                     continue;
                 }
             }
@@ -170,13 +202,13 @@ impl<'a> Reference<'a> {
         if path.bounces >= self.options.shading.bounces {
             return color;
         }
-        let spawn = |direction: DVec3, side: DVec3, weight: DVec3, index: f64| -> DVec3 {
+        let mut spawn = |direction: DVec3, side: DVec3, weight: DVec3, index: f64| -> DVec3 {
             let path = Path { bounces: path.bounces + 1, weight: path.weight * weight.length(), index };
             if weight == DVec3::ZERO || path.weight < self.options.shading.weight {
                 return DVec3::ZERO;
             }
             let origin = spawn_origin(surface.point, side, direction);
-            weight * self.trace(&Ray::new(origin, direction, 0.0), path)
+            weight * self.trace(&Ray::new(origin, direction, 0.0), path, stats)
         };
         // Mirror reflection, on the viewer's side of the surface.
         let d = ray.direction;
@@ -189,6 +221,49 @@ impl<'a> Reference<'a> {
         }
         color
     }
+}
+
+/// The unit direction towards `light` from `point` and the light's colour arriving there
+/// (docs/SPEC.md §5: a point light attenuated by `a0 + a1·d + a2·d²`).
+fn light_from(light: &Light, point: DVec3) -> (DVec3, DVec3) {
+    match light {
+        Light::Directional(light) => (-light.direction.normalize(), light.color),
+        Light::Point(light) => {
+            let offset = light.position - point;
+            let d = offset.length();
+            let [a0, a1, a2] = light.attenuation.to_array();
+            // The parser makes the coefficients ≥ 0 and not all 0: the divisor is
+            // positive for d > 0; at the light itself it is kept from reaching 0.
+            let divisor = (a0 + a1 * d + a2 * d * d).max(f64::MIN_POSITIVE);
+            (offset / d, light.color / divisor)
+        }
+    }
+}
+
+/// The outward normal of the cell face a ray moving along `direction` looks at head-on:
+/// against the direction's largest component.
+fn facing_face(direction: DVec3) -> DVec3 {
+    let axis = direction.abs().max_position();
+    let mut n = DVec3::ZERO;
+    n[axis] = -direction[axis].signum();
+    n
+}
+
+/// docs/SPEC.md §7: the colour of a cell holding `count` items, by bands of counts that
+/// double: 1–2 magenta, 3–4 blue, 5–8 cyan, 9–16 green, 17–32 yellow, more red. The hue
+/// steps 60° for each doubling, so a picture's density reads as a rainbow.
+pub fn voxel_color(count: usize) -> DVec3 {
+    const BANDS: [DVec3; 6] = [
+        DVec3::new(1.0, 0.0, 1.0),
+        DVec3::new(0.0, 0.0, 1.0),
+        DVec3::new(0.0, 1.0, 1.0),
+        DVec3::new(0.0, 1.0, 0.0),
+        DVec3::new(1.0, 1.0, 0.0),
+        DVec3::new(1.0, 0.0, 0.0),
+    ];
+    // ⌈log₂ count⌉ − 1, at least 0: 1 and 2 → 0, 3 and 4 → 1, 5…8 → 2, …
+    let band = (count.max(2) - 1).ilog2() as usize;
+    BANDS[band.min(BANDS.len() - 1)]
 }
 
 /// Where a secondary ray is in the recursion of docs/SPEC.md §5.

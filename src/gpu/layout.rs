@@ -29,7 +29,15 @@ pub struct Params {
     pub loop_canary_trips: u32,
     /// `-weight`: no secondary ray whose weight falls below it.
     pub weight: f32,
-    pub _pad: [u32; 2],
+    /// Cells of the `-grid` along x and y (USE_GRID).
+    pub grid_nx: u32,
+    pub grid_ny: u32,
+    /// The corner of the grid's box, camera-relative like the primitives.
+    pub grid_min: [f32; 3],
+    pub grid_nz: u32,
+    /// One cell's extent along each axis.
+    pub grid_cell: [f32; 3],
+    pub _pad: u32,
 }
 
 /// How many times the kernel's canary loop runs (WGSL `loops_were_cut`): twice, unless the

@@ -77,6 +77,8 @@ pub enum Acceleration {
     Hierarchy,
     /// Every primitive for every ray.
     Flat,
+    /// The uniform grid `-grid` asks for (docs/SPEC.md §7); never chosen otherwise.
+    Grid,
 }
 
 impl Acceleration {
@@ -86,6 +88,7 @@ impl Acceleration {
             Acceleration::Bins => "bins",
             Acceleration::Hierarchy => "hierarchy",
             Acceleration::Flat => "flat",
+            Acceleration::Grid => "grid",
         }
     }
 }
@@ -141,6 +144,7 @@ pub struct KernelConfig {
     pub sphere_test: SphereTest,
     pub use_bvh: bool,
     pub use_bins: bool,
+    pub use_grid: bool,
 }
 
 impl KernelConfig {
@@ -174,6 +178,7 @@ impl KernelConfig {
             sphere_test: options.sphere_test,
             use_bvh: buffers.bvh.is_some(),
             use_bins: buffers.bins.is_some(),
+            use_grid: buffers.grid.is_some(),
         };
         // Every pixel, whatever it casts: a hierarchy that cannot cull (slivers across the
         // view), a crowded bin or a flat loop passes the limit on primary rays alone.
@@ -206,7 +211,7 @@ impl KernelConfig {
     }
 
     /// The values for `PipelineCompilationOptions::constants`.
-    pub fn constants(&self) -> [(&'static str, f64); 22] {
+    pub fn constants(&self) -> [(&'static str, f64); 23] {
         let b = |v: bool| if v { 1.0 } else { 0.0 };
         [
             ("HAS_SPHERES", b(self.has_spheres)),
@@ -231,6 +236,7 @@ impl KernelConfig {
             ("SPHERE_TEST", self.sphere_test as u32 as f64),
             ("USE_BVH", b(self.use_bvh)),
             ("USE_BINS", b(self.use_bins)),
+            ("USE_GRID", b(self.use_grid)),
         ]
     }
 }
@@ -306,6 +312,11 @@ pub struct RenderStats {
     pub scene_bytes: u64,
     /// How the kernel found candidates (never `Auto`: what the cost model chose).
     pub acceleration: Acceleration,
+    /// The course's statistics (`-stats`), where the renderer counted them: the reference
+    /// does; the kernel does not yet.
+    pub counted: Option<crate::render::RayStats>,
+    /// The box the `-grid` cells divide, where there was a grid.
+    pub grid_bounds: Option<crate::scene::Bounds>,
 }
 
 impl GpuRenderer {

@@ -63,8 +63,8 @@ impl<'a> PreparedScene<'a> {
         super::precision::check(scene, options).map_err(GpuError::Precision)?;
         let rays = crate::camera::PrimaryRays::for_camera(&scene.camera, options.width, options.height);
         let secondary_rays = tree.depth > 0 || (options.shading.shadows && !scene.lights.is_empty());
-        let buffers = SceneBuffers::new(scene, &rays, &gpu.options, secondary_rays);
-        let flat = buffers.bins.is_none() && buffers.bvh.is_none();
+        let buffers = SceneBuffers::new(scene, &rays, &gpu.options, secondary_rays, options.grid);
+        let flat = buffers.bins.is_none() && buffers.bvh.is_none() && buffers.grid.is_none();
         let primitives =
             buffers.spheres.len() + buffers.ellipsoids.len() + buffers.planes.len() + buffers.triangles.len();
         if flat && primitives > super::flatten::LOOP_LIMIT as usize / 2 {
@@ -97,11 +97,14 @@ impl<'a> PreparedScene<'a> {
                     .bvh
                     .as_ref()
                     .map(|b| b.build_ms)
-                    .or(buffers.bins.as_ref().map(|b| b.build_ms)),
+                    .or(buffers.bins.as_ref().map(|b| b.build_ms))
+                    .or(buffers.grid.as_ref().map(|g| g.build_ms)),
                 prepare_ms: start.elapsed().as_secs_f64() * 1e3,
                 scene_bytes,
                 acceleration: buffers.acceleration(),
                 pixels_cut_short: 0,
+                counted: None,
+                grid_bounds: None,
             },
             fallback: config.loop_canary.then(|| scene.clone()),
         })
@@ -289,6 +292,10 @@ fn upload_inputs(
     let limit = gpu.limits.max_storage_buffer_binding_size;
     let bvh = buffers.bvh.as_ref();
     let bins = buffers.bins.as_ref();
+    let grid = buffers.grid.as_ref();
+    // A grid has no hierarchy nor bins, and takes their bindings for its cells.
+    let refs = grid.map_or(bvh.map_or(&[][..], |b| &b.prim_refs), |g| &g.refs);
+    let ranges = grid.map_or(bins.map_or(&[][..], |b| &b.ranges), |g| &g.ranges);
     let contents: [Option<&[u8]>; BINDINGS.len()] = [
         None,
         Some(non_empty(&buffers.spheres)),
@@ -299,9 +306,9 @@ fn upload_inputs(
         Some(non_empty(&buffers.lights)),
         None,
         Some(non_empty(bvh.map_or(&[][..], |b| &b.nodes))),
-        Some(non_empty(bvh.map_or(&[][..], |b| &b.prim_refs))),
+        Some(non_empty(refs)),
         Some(non_empty(bins.map_or(&[][..], |b| &b.eye_triangles))),
-        Some(non_empty(bins.map_or(&[][..], |b| &b.ranges))),
+        Some(non_empty(ranges)),
         Some(non_empty(bins.map_or(&[][..], |b| &b.items))),
     ];
     let mut out: [Option<wgpu::Buffer>; BINDINGS.len()] = Default::default();

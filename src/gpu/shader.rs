@@ -18,6 +18,7 @@ use std::sync::OnceLock;
 /// - `closest.wgsl`: the `Closest` record, a reference's test, flat loops;
 /// - `bvh.wgsl`: the box test, the nearest-hit and any-hit walks;
 /// - `bins.wgsl`: primary-ray triangles and the packet's walk of a bin;
+/// - `grid.wgsl`: the 3D-DDA through the `-grid`'s cells, nearest and any hit;
 /// - `occluded.wgsl`: the any-hit query;
 /// - `surface.wgsl`, `shading.wgsl`, `tree.wgsl`, `output.wgsl`: the nearest hit's surface
 ///   and where rays leaving it start, its directly lit colour, the reflected and refracted
@@ -27,7 +28,7 @@ use std::sync::OnceLock;
 /// Plain concatenation, not a composer such as naga_oil: nothing is resolved at run time,
 /// no dependency is added, and naga sees one module as it did when the kernel was one file
 /// (lavapipe's compile time, measured with an empty shader cache, did not change).
-pub const FILES: [(&str, &str); 16] = [
+pub const FILES: [(&str, &str); 17] = [
     ("params.wgsl", include_str!("../../shaders/params.wgsl")),
     ("ray.wgsl", include_str!("../../shaders/ray.wgsl")),
     ("camera.wgsl", include_str!("../../shaders/camera.wgsl")),
@@ -38,6 +39,7 @@ pub const FILES: [(&str, &str); 16] = [
     ("closest.wgsl", include_str!("../../shaders/closest.wgsl")),
     ("bvh.wgsl", include_str!("../../shaders/bvh.wgsl")),
     ("bins.wgsl", include_str!("../../shaders/bins.wgsl")),
+    ("grid.wgsl", include_str!("../../shaders/grid.wgsl")),
     ("occluded.wgsl", include_str!("../../shaders/occluded.wgsl")),
     ("surface.wgsl", include_str!("../../shaders/surface.wgsl")),
     ("shading.wgsl", include_str!("../../shaders/shading.wgsl")),

@@ -7,6 +7,9 @@
 //! docs/lavapipe.md) is no reason to refuse: the kernel marks the pixels it cut, and the
 //! reference renders them ([`super::PreparedScene`]).
 //!
+//! `-visualize_grid` and `-stats` (the course's assignments 5 and 6) it refuses for now:
+//! the reference renders them (docs/SPEC.md §7). `-grid` it walks like the reference.
+//!
 //! The flags that shape only the course's OpenGL preview (`-gui`, `-tessellation`,
 //! `-gouraud`) change no pixel of the files, so the kernel honours them by ignoring them.
 
@@ -36,8 +39,11 @@ impl fmt::Display for UnsupportedError {
 impl std::error::Error for UnsupportedError {}
 
 /// The shape of the kernel's ray tree for `scene` at `options`, or why its stack cannot
-/// hold it.
+/// hold it, or the course's flag it does not implement yet ([`voxels_or_stats`]).
 pub fn check(scene: &Scene, options: &RenderOptions) -> Result<TreeShape, UnsupportedError> {
+    if let Some(what) = voxels_or_stats(options) {
+        return Err(UnsupportedError { file: scene.path.clone(), location: None, what });
+    }
     let shape = TreeShape::new(scene, &options.shading);
     if !shape.fits_stack() {
         return Err(UnsupportedError {
@@ -53,4 +59,13 @@ pub fn check(scene: &Scene, options: &RenderOptions) -> Result<TreeShape, Unsupp
         });
     }
     Ok(shape)
+}
+
+/// Why the kernel refuses the course's `-visualize_grid` and `-stats`, the first one given:
+/// it draws no voxels and counts nothing yet. (`-grid` itself it walks: shaders/grid.wgsl.)
+fn voxels_or_stats(options: &RenderOptions) -> Option<String> {
+    if options.visualize_grid {
+        return Some("-visualize_grid: the GPU kernel does not draw the grid's cells yet".into());
+    }
+    options.stats.then(|| "-stats: the GPU kernel does not count rays, tests or cells yet".into())
 }

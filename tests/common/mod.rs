@@ -35,6 +35,16 @@ pub fn corpus() -> Option<PathBuf> {
     None
 }
 
+/// SplitMix64 (Steele, Lea & Flood 2014), one step: deterministic random test inputs that
+/// replay.
+pub fn splitmix64(state: &mut u64) -> u64 {
+    *state = state.wrapping_add(0x9e37_79b9_7f4a_7c15);
+    let mut z = *state;
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    z ^ (z >> 31)
+}
+
 /// The project's own scenes.
 pub fn scenes_dir() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes")
