@@ -15,6 +15,7 @@ pub mod precision;
 mod prepared;
 pub mod shader;
 pub mod support;
+pub mod texture_range;
 pub mod tree;
 
 use crate::render::{Frame, Output, RenderOptions, SphereTest, TriangleTest};
@@ -141,6 +142,8 @@ pub struct KernelConfig {
     pub sphere_test: SphereTest,
     pub use_bvh: bool,
     pub use_bins: bool,
+    /// Some material is a solid texture (`shaders/texture.wgsl`).
+    pub textures: bool,
 }
 
 impl KernelConfig {
@@ -174,10 +177,13 @@ impl KernelConfig {
             sphere_test: options.sphere_test,
             use_bvh: buffers.bvh.is_some(),
             use_bins: buffers.bins.is_some(),
+            textures: !buffers.textures.is_empty(),
         };
         // Only a ray tree or shadow rays multiply a pixel's loops; the rest is left to the
         // accelerations' own bounds. The tree runs only for the colour image.
-        config.loop_canary = loop_limit && pixel_layout.outputs.contains(Output::Color) && config.secondary_rays();
+        // A texture's blend loop adds to them too.
+        config.loop_canary =
+            loop_limit && pixel_layout.outputs.contains(Output::Color) && (config.secondary_rays() || config.textures);
         config
     }
 
@@ -206,7 +212,7 @@ impl KernelConfig {
     }
 
     /// The values for `PipelineCompilationOptions::constants`.
-    pub fn constants(&self) -> [(&'static str, f64); 22] {
+    pub fn constants(&self) -> [(&'static str, f64); 23] {
         let b = |v: bool| if v { 1.0 } else { 0.0 };
         [
             ("HAS_SPHERES", b(self.has_spheres)),
@@ -231,6 +237,7 @@ impl KernelConfig {
             ("SPHERE_TEST", self.sphere_test as u32 as f64),
             ("USE_BVH", b(self.use_bvh)),
             ("USE_BINS", b(self.use_bins)),
+            ("TEXTURES", b(self.textures)),
         ]
     }
 }
@@ -251,7 +258,7 @@ const fn binding<T>(name: &'static str, writable: bool) -> Binding {
 /// Every binding of the kernel (`shaders/params.wgsl`), index = `@binding`. The bind-group layout and
 /// every bind group are built from this table, and `tests/layout.rs` checks it against the
 /// shader's own declarations (names, order, access, element sizes).
-pub const BINDINGS: [Binding; 13] = [
+pub const BINDINGS: [Binding; 15] = [
     binding::<layout::Params>("params", false),
     binding::<layout::GpuSphere>("spheres", false),
     binding::<layout::GpuEllipsoid>("ellipsoids", false),
@@ -265,6 +272,8 @@ pub const BINDINGS: [Binding; 13] = [
     binding::<layout::EyeTriangle>("eye_triangles", false),
     binding::<[u32; 2]>("bin_ranges", false),
     binding::<layout::BinItem>("bin_items", false),
+    binding::<layout::GpuTexture>("textures", false),
+    binding::<u32>("permutation", false),
 ];
 
 /// Kernels a renderer keeps compiled (see [`GpuRenderer::pipeline`]).

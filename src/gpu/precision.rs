@@ -82,17 +82,22 @@ pub struct PrecisionError {
     /// Its magnitude, camera-relative and after transforms (NaN or infinite if f64 itself
     /// overflowed computing it).
     pub magnitude: f64,
+    /// The range it left, in words ([`RANGE`], or a texture's, [`super::texture_range`]).
+    pub range: String,
 }
+
+/// The range of every magnitude but textures', in words.
+pub const RANGE: &str = "0 or 2^-25 to 2^28, with the camera at the origin";
 
 impl fmt::Display for PrecisionError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write_place(f, &self.file, self.location)?;
         write!(
             f,
-            ": {}: magnitude {} is outside the range the GPU's f32 kernel renders faithfully \
-             (0 or 2^-25 to 2^28, with the camera at the origin)",
+            ": {}: magnitude {} is outside the range the GPU's f32 kernel renders faithfully ({})",
             self.what,
-            show(self.magnitude)
+            show(self.magnitude),
+            self.range
         )
     }
 }
@@ -152,7 +157,8 @@ pub fn check(scene: &Scene, options: &RenderOptions) -> Result<(), PrecisionErro
         // A ratio of indices bends every refracted ray: both ends of the range matter.
         checker.scalar(at, &format!("Material {k} indexOfRefraction"), material.index_of_refraction)?;
     }
-    checker.objects(&scene.root, &DMat4::from_translation(-scene.camera.center))
+    checker.objects(&scene.root, &DMat4::from_translation(-scene.camera.center))?;
+    super::texture_range::check(scene, options)
 }
 
 struct Checker<'a> {
@@ -174,7 +180,13 @@ fn max_norm(v: DVec3) -> f64 {
 
 impl Checker<'_> {
     fn error(&self, location: Option<Location>, what: &str, magnitude: f64) -> PrecisionError {
-        PrecisionError { file: self.scene.to_path_buf(), location, what: what.to_string(), magnitude }
+        PrecisionError {
+            file: self.scene.to_path_buf(),
+            location,
+            what: what.to_string(),
+            magnitude,
+            range: RANGE.to_string(),
+        }
     }
 
     fn scalar(&self, location: Option<Location>, what: &str, value: f64) -> Result<(), PrecisionError> {
@@ -280,6 +292,7 @@ impl Checker<'_> {
                     location: Some(location),
                     what: format!("mesh vertex {}", k + 1),
                     magnitude,
+                    range: RANGE.to_string(),
                 },
                 None => self.error(
                     Some(at),
@@ -293,7 +306,7 @@ impl Checker<'_> {
 }
 
 /// A magnitude in short scientific notation: `1e39`, `2.684e8`.
-fn show(value: f64) -> String {
+pub(super) fn show(value: f64) -> String {
     let text = format!("{value:.3e}");
     match text.split_once('e') {
         Some((mantissa, exponent)) if mantissa.contains('.') => {

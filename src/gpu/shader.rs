@@ -19,6 +19,7 @@ use std::sync::OnceLock;
 /// - `bvh.wgsl`: the box test, the nearest-hit and any-hit walks;
 /// - `bins.wgsl`: primary-ray triangles and the packet's walk of a bin;
 /// - `occluded.wgsl`: the any-hit query;
+/// - `texture.wgsl`: solid textures, Perlin's improved noise;
 /// - `surface.wgsl`, `shading.wgsl`, `tree.wgsl`, `output.wgsl`: the nearest hit's surface
 ///   and where rays leaving it start, its directly lit colour, the reflected and refracted
 ///   rays' colours, the words it leaves in the output;
@@ -27,7 +28,7 @@ use std::sync::OnceLock;
 /// Plain concatenation, not a composer such as naga_oil: nothing is resolved at run time,
 /// no dependency is added, and naga sees one module as it did when the kernel was one file
 /// (lavapipe's compile time, measured with an empty shader cache, did not change).
-pub const FILES: [(&str, &str); 16] = [
+pub const FILES: [(&str, &str); 17] = [
     ("params.wgsl", include_str!("../../shaders/params.wgsl")),
     ("ray.wgsl", include_str!("../../shaders/ray.wgsl")),
     ("camera.wgsl", include_str!("../../shaders/camera.wgsl")),
@@ -40,6 +41,7 @@ pub const FILES: [(&str, &str); 16] = [
     ("bins.wgsl", include_str!("../../shaders/bins.wgsl")),
     ("occluded.wgsl", include_str!("../../shaders/occluded.wgsl")),
     ("surface.wgsl", include_str!("../../shaders/surface.wgsl")),
+    ("texture.wgsl", include_str!("../../shaders/texture.wgsl")),
     ("shading.wgsl", include_str!("../../shaders/shading.wgsl")),
     ("tree.wgsl", include_str!("../../shaders/tree.wgsl")),
     ("output.wgsl", include_str!("../../shaders/output.wgsl")),
@@ -57,6 +59,11 @@ pub fn host_constants() -> String {
         ("PACKET", super::BIN_PACKET, "rays per invocation of main_bins (gpu::BIN_PACKET)"),
         ("REF_KIND_SHIFT", REF_KIND_SHIFT, "a reference is kind << REF_KIND_SHIFT | index"),
         ("TREE_STACK", super::tree::TREE_STACK, "rays waiting in a ray tree (gpu::tree::TREE_STACK)"),
+        (
+            "BLEND_STACK",
+            crate::scene::MAX_TEXTURE_NESTING as u32 + 1,
+            "materials waiting in a texture's blend (scene::MAX_TEXTURE_NESTING + 1)",
+        ),
     ];
     for (name, value, what) in sizes {
         let _ = writeln!(out, "// {what}\nconst {name}: u32 = {value}u;");
