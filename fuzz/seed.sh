@@ -1,7 +1,7 @@
 #!/bin/sh
 # Seeds fuzz/corpus/{scene,obj} from the project's scenes, fuzz/seeds (an assignment-4 scene:
 # point lights, attenuation, every material field) and, when they are there, the course's
-# scenes and meshes (a2, a3, a4 of $RAYCASTER_CORPUS, else of ../shared/mit6837 beside the
+# scenes and meshes (a2, a3, a4, a6 of $RAYCASTER_CORPUS, else of ../shared/mit6837 beside the
 # repository; read at run time, never committed).
 set -eu
 caller=$(pwd)
@@ -12,7 +12,7 @@ case "${RAYCASTER_CORPUS:-}" in
     *) corpus=$caller/$RAYCASTER_CORPUS ;;
 esac
 mkdir -p corpus/scene corpus/obj
-for dir in ../scenes ../scenes/hard seeds "$corpus/a2" "$corpus/a3" "$corpus/a4"; do
+for dir in ../scenes ../scenes/hard seeds "$corpus/a2" "$corpus/a3" "$corpus/a4" "$corpus/a6"; do
     [ -d "$dir" ] || continue
     for f in "$dir"/*.txt; do
         case "$f" in */commands.txt) continue ;; esac

@@ -64,6 +64,8 @@ override USE_BINS: bool = false;
 // Finite primitives through the -grid's cells (shaders/grid.wgsl), which reuse the bins'
 // bindings: bin_ranges holds each cell's (first, count) in prim_refs.
 override USE_GRID: bool = false;
+// Some material is a solid texture (shaders/texture.wgsl); without, no texture code.
+override TEXTURES: bool = false;
 
 const F32_MAX: f32 = 3.40282347e38;
 // The "no hit" distance: never less than any closest-so-far, and what a Closest holds
@@ -175,6 +177,23 @@ struct Material {
     _pad1: u32,
 }
 
+// A material's solid texture (gpu::layout::GpuTexture), kind 0 for a Phong material: the
+// rows of the affine map from camera-relative world space to texture space, the kind
+// (1 Checkerboard, 2 Noise, 3 Marble, 4 Wood), the two materials it blends and its numbers.
+struct Texture {
+    row0: vec4<f32>,
+    row1: vec4<f32>,
+    row2: vec4<f32>,
+    kind: u32,
+    first: u32,
+    second: u32,
+    octaves: u32,
+    frequency: f32,
+    amplitude: f32,
+    _pad0: u32,
+    _pad1: u32,
+}
+
 // A DirectionalLight or a PointLight (is_point), as gpu::layout::GpuLight.
 struct Light {
     // Directional: −normalise(direction), from the surface toward the light. Point: the
@@ -216,3 +235,7 @@ var<private> P: Params;
 // Per bin (BIN_SIDE × BIN_SIDE pixels, row by row from the top): first item and count.
 @group(0) @binding(11) var<storage, read> bin_ranges: array<vec2<u32>>;
 @group(0) @binding(12) var<storage, read> bin_items: array<BinItem>;
+// One per material where TEXTURES (a single zero entry otherwise).
+@group(0) @binding(13) var<storage, read> textures: array<Texture>;
+// Perlin's permutation (256 entries) where TEXTURES (a single zero otherwise).
+@group(0) @binding(14) var<storage, read> permutation: array<u32>;

@@ -75,13 +75,21 @@ fn facing_normal(surface: Surface, ray: Ray) -> vec3<f32> {
     return select(surface.normal, -surface.normal, dot(ray.direction, surface.normal) > 0.0);
 }
 
-// Ambient plus each light, seen along `ray` (unit direction).
+// Ambient plus each light, seen along `ray` (unit direction); a solid texture's blend of
+// its materials' colours.
 fn shade(surface: Surface, ray: Ray) -> vec3<f32> {
     if (is_black(surface, ray)) {
         return vec3<f32>(0.0);
     }
     let n = facing_normal(surface, ray);
-    let material = materials[surface.material];
+    if (TEXTURES && textures[surface.material].kind != 0u) {
+        return shade_blend(surface, n, ray);
+    }
+    return shade_phong(materials[surface.material], surface, n, ray);
+}
+
+// One Phong material's colour at the surface, n facing the viewer.
+fn shade_phong(material: Material, surface: Surface, n: vec3<f32>, ray: Ray) -> vec3<f32> {
     var color = P.ambient * material.diffuse;
     for (var k = 0u; k < NUM_LIGHTS; k++) {
         let light = lights[k];
@@ -91,6 +99,44 @@ fn shade(surface: Surface, ray: Ray) -> vec3<f32> {
             continue;
         }
         color += local(material, n, arriving, -ray.direction);
+    }
+    return color;
+}
+
+// The materials a texture blends, waiting with their shares: depth first, at most one
+// sibling waits per level of nesting, so BLEND_STACK (the parser's nesting limit + 1)
+// slots hold them.
+var<private> blend_material: array<u32, BLEND_STACK>;
+var<private> blend_share: array<f32, BLEND_STACK>;
+
+// The texture at the surface's material as the reference blends it (cpu::Reference::
+// shade_material): each Phong material it reaches, through nested textures, shaded and
+// weighted by the product of the shares on its way; a material with no share is not shaded.
+fn shade_blend(surface: Surface, n: vec3<f32>, ray: Ray) -> vec3<f32> {
+    var color = vec3<f32>(0.0);
+    blend_material[0] = surface.material;
+    blend_share[0] = 1.0;
+    var len = 1u;
+    while (len > 0u) {
+        len -= 1u;
+        let m = blend_material[len];
+        let share = blend_share[len];
+        let t = textures[m];
+        if (t.kind == 0u) {
+            color += share * shade_phong(materials[m], surface, n, ray);
+            continue;
+        }
+        let first = first_material_share(t, surface.point);
+        if (first < 1.0) {
+            blend_material[len] = t.second;
+            blend_share[len] = share * (1.0 - first);
+            len += 1u;
+        }
+        if (first > 0.0) {
+            blend_material[len] = t.first;
+            blend_share[len] = share * first;
+            len += 1u;
+        }
     }
     return color;
 }

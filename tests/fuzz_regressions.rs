@@ -108,11 +108,12 @@ fn the_allocation_recorder_sees_a_reservation() {
 /// The committed seeds of `fuzz/seeds` load as the scene target reads its inputs (as a file in
 /// `scenes/`, where their `obj_file` names resolve), and between them use every part of
 /// assignment 4's grammar: so the fuzzer starts from inputs that reach point lights,
-/// attenuation and every material field.
+/// attenuation and every material field, and of assignment 6's: every solid texture, one
+/// nested in another.
 #[test]
-fn the_committed_fuzz_seeds_load_and_cover_assignment_4() {
+fn the_committed_fuzz_seeds_load_and_cover_assignments_4_and_6() {
     use glam::DVec3;
-    use raycaster::scene::Light;
+    use raycaster::scene::{Light, TextureKind};
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let as_the_target_reads = root.join("scenes/fuzz.txt");
     let mut scenes = Vec::new();
@@ -133,6 +134,17 @@ fn the_committed_fuzz_seeds_load_and_cover_assignment_4() {
         ("an index of refraction", materials.iter().any(|m| m.index_of_refraction != 1.0)),
         ("a mesh", scenes.iter().any(|s| s.primitive_counts().triangles > 0)),
     ];
+    let textures: Vec<_> = scenes.iter().flat_map(|s| s.textures.iter().flatten().map(move |t| (s, t))).collect();
+    let kind = |k: TextureKind| textures.iter().any(|(_, t)| t.kind == k);
+    let nested = textures.iter().any(|(s, t)| t.materials.iter().any(|&m| s.texture(m).is_some()));
+    let covered = covered.into_iter().chain([
+        ("a Checkerboard", kind(TextureKind::Checkerboard)),
+        ("a Noise", kind(TextureKind::Noise)),
+        ("a Marble", kind(TextureKind::Marble)),
+        ("a Wood", kind(TextureKind::Wood)),
+        ("a texture of textures", nested),
+    ]);
+    let covered: Vec<(&str, bool)> = covered.collect();
     let missing: Vec<&str> = covered.iter().filter(|(_, found)| !found).map(|(what, _)| *what).collect();
     assert!(missing.is_empty(), "no seed has {missing:?}");
 }

@@ -4,8 +4,8 @@
 
 use raycaster::bvh::BvhNode;
 use raycaster::gpu::layout::{
-    BinItem, EyeTriangle, GpuEllipsoid, GpuLight, GpuMaterial, GpuPlane, GpuSphere, GpuTriangle, Params, PixelLayout,
-    PrimitiveKind, REF_KIND_SHIFT,
+    BinItem, EyeTriangle, GpuEllipsoid, GpuLight, GpuMaterial, GpuPlane, GpuSphere, GpuTexture, GpuTriangle, Params,
+    PixelLayout, PrimitiveKind, REF_KIND_SHIFT,
 };
 use raycaster::gpu::shader;
 use raycaster::gpu::{KernelConfig, BINDINGS};
@@ -136,6 +136,22 @@ fn host_structs_match_the_shader() {
     );
     check(
         &m,
+        "Texture",
+        size_of::<GpuTexture>(),
+        &[
+            ("row0", offset_of!(GpuTexture, row0)),
+            ("row1", offset_of!(GpuTexture, row1)),
+            ("row2", offset_of!(GpuTexture, row2)),
+            ("kind", offset_of!(GpuTexture, kind)),
+            ("first", offset_of!(GpuTexture, first)),
+            ("second", offset_of!(GpuTexture, second)),
+            ("octaves", offset_of!(GpuTexture, octaves)),
+            ("frequency", offset_of!(GpuTexture, frequency)),
+            ("amplitude", offset_of!(GpuTexture, amplitude)),
+        ],
+    );
+    check(
+        &m,
         "Light",
         size_of::<GpuLight>(),
         &[
@@ -237,6 +253,7 @@ fn override_constants_match_the_host() {
         use_bvh: false,
         use_bins: false,
         use_grid: false,
+        textures: true,
     };
     let mut host: Vec<String> = config.constants().iter().map(|(name, _)| name.to_string()).collect();
     host.sort();

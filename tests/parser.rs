@@ -1189,3 +1189,154 @@ fn orthonormal(frame: &raycaster::scene::CameraBasis) -> bool {
         && orthogonal(frame.direction, frame.horizontal)
         && orthogonal(frame.up, frame.horizontal)
 }
+
+// ---------------------------------------------------------------------------------------
+// solid textures (GRAMMAR.md A6)
+
+/// A scene whose `Materials` block holds two Phong materials (lines 4 and 5), then the
+/// given material lines from line 6 on.
+fn with_textures(lines: &[&str]) -> String {
+    let count = 2 + lines.len();
+    let mut text = vec![
+        CAMERA.to_string(),
+        LIGHTS.to_string(),
+        format!("Materials {{ numMaterials {count}"),
+        "PhongMaterial { diffuseColor 1 0 0 }".to_string(),
+        "PhongMaterial { diffuseColor 0 0 1 }".to_string(),
+    ];
+    text.extend(lines.iter().map(|l| l.to_string()));
+    text.push("}".to_string());
+    text.push("Group { numObjects 1 MaterialIndex 2 Sphere { center 0 0 0 radius 1 } }".to_string());
+    text.join("\n")
+}
+
+/// The 1-based column where `needle` first starts in `line` (ASCII).
+fn col(line: &str, needle: &str) -> u32 {
+    line.find(needle).unwrap_or_else(|| panic!("`{needle}` not in `{line}`")) as u32 + 1
+}
+
+#[test]
+fn texture_blocks_read_every_field() {
+    use raycaster::scene::TextureKind;
+    let text = with_textures(&[
+        "Checkerboard { Transform { UniformScale 2 } materialIndex 0 materialIndex 1 }",
+        "Noise { materialIndex 1 materialIndex 2 octaves 3 }",
+        "Marble { Transform { Translate 1 0 0 XRotate 90 } materialIndex 0 materialIndex 3 \
+         octaves 5 frequency 3 amplitude 2 }",
+        "Wood { amplitude -1.5 octaves 0 materialIndex 4 materialIndex 0 frequency 7 }",
+    ]);
+    let scene = parse(&text);
+    assert_eq!(scene.materials.len(), 6);
+    assert_eq!(scene.textures.len(), 6);
+    assert!(scene.texture(0).is_none() && scene.texture(1).is_none());
+    let [checker, noise, marble, wood] = [2, 3, 4, 5].map(|k| *scene.texture(k).unwrap());
+    assert_eq!((checker.kind, checker.materials), (TextureKind::Checkerboard, [0, 1]));
+    assert!(close(checker.to_texture.transform_point3(DVec3::new(1.0, -2.0, 0.5)), DVec3::new(2.0, -4.0, 1.0)));
+    assert_eq!((noise.kind, noise.materials, noise.octaves), (TextureKind::Noise, [1, 2], 3));
+    assert_eq!(noise.to_texture, DMat4::IDENTITY, "no Transform: identity");
+    assert_eq!(
+        (marble.kind, marble.materials, marble.octaves, marble.frequency, marble.amplitude),
+        (TextureKind::Marble, [0, 3], 5, 3.0, 2.0)
+    );
+    // First listed, applied last: XRotate 90 takes (0, 0, 1) to (0, −1, 0), then + (1, 0, 0).
+    assert!(close(marble.to_texture.transform_point3(DVec3::Z), DVec3::new(1.0, -1.0, 0.0)));
+    assert_eq!(
+        (wood.kind, wood.materials, wood.octaves, wood.frequency, wood.amplitude),
+        (TextureKind::Wood, [4, 0], 0, 7.0, -1.5),
+        "fields in any order"
+    );
+    // Each texture stands in, for the Phong terms, as its first material (resolved through
+    // textures): the course's OpenGL preview.
+    let red = scene.materials[0];
+    assert_eq!([2, 3, 4, 5].map(|k| scene.materials[k]), [red, scene.materials[1], red, red]);
+    assert_eq!(scene.material_locations[2], Location { line: 6, col: 1 });
+    assert_eq!(scene.material_locations[5], Location { line: 9, col: 1 });
+    // A scene without textures keeps no texture list at all.
+    assert!(parse(&with_header(&[])).textures.is_empty());
+}
+
+#[test]
+fn course_texture_scenes_parse() {
+    use raycaster::scene::TextureKind::{self, *};
+    let Some(corpus) = common::corpus() else { return };
+    let a6 = corpus.join("a6");
+    let kinds = |name: &str| -> Vec<(usize, TextureKind)> {
+        let scene = load_scene(&a6.join(name)).unwrap_or_else(|e| panic!("{e}"));
+        (0..scene.materials.len() as u32).filter_map(|k| scene.texture(k).map(|t| (k as usize, t.kind))).collect()
+    };
+    assert_eq!(kinds("scene6_13_checkerboard.txt"), [(2, Checkerboard), (5, Checkerboard)]);
+    assert_eq!(kinds("scene6_15_marble_cubes.txt"), [(2, Noise), (5, Noise), (8, Marble), (11, Marble)]);
+    assert_eq!(kinds("scene6_16_wood_cubes.txt").iter().filter(|(_, k)| *k == Wood).count(), 4);
+    for name in ["scene6_17_marble_vase.txt", "scene6_18_6.837_logo.txt"] {
+        assert!(!kinds(name).is_empty(), "{name}");
+    }
+    // 6_15's first noise cube sits at (−1.5, 1.5, 0); its texture's Transform (… Translate
+    // 1.5 −1.5 0) takes that point to the origin of texture space.
+    let scene = load_scene(&a6.join("scene6_15_marble_cubes.txt")).unwrap();
+    let noise = scene.texture(2).unwrap();
+    assert!(noise.to_texture.transform_point3(DVec3::new(-1.5, 1.5, 0.0)).length() < 1e-12);
+    let marble = scene.texture(8).unwrap();
+    assert_eq!((marble.octaves, marble.frequency, marble.amplitude, marble.materials), (0, 3.0, 3.0, [6, 7]));
+}
+
+#[test]
+fn texture_material_indices_must_name_earlier_materials() {
+    for (line, needle, message) in [
+        ("Checkerboard { materialIndex 0 materialIndex 2 }", "2 }", "materialIndex 2 must name an earlier material"),
+        ("Noise { materialIndex 7 materialIndex 0 octaves 1 }", "7", "materialIndex 7 must name an earlier material"),
+        ("Checkerboard { materialIndex 0 materialIndex 3 }", "3 }", "this Checkerboard is material 2"),
+    ] {
+        assert_error_at(&with_textures(&[line]), 6, col(line, needle), message);
+    }
+    // A texture may name an earlier texture.
+    let nested = with_textures(&[
+        "Checkerboard { materialIndex 0 materialIndex 1 }",
+        "Checkerboard { Transform { UniformScale 4 } materialIndex 2 materialIndex 1 }",
+    ]);
+    assert_eq!(parse(&nested).texture(3).unwrap().materials, [2, 1]);
+}
+
+#[test]
+fn texture_block_errors_are_located() {
+    let cases: [(&str, &str, &str); 9] = [
+        ("Checkerboard { }", "}", "Checkerboard is missing `materialIndex`"),
+        ("Noise { materialIndex 0 materialIndex 1 }", "}", "Noise is missing `octaves`"),
+        ("Marble { materialIndex 0 materialIndex 1 octaves 2 frequency 3 }", "}", "Marble is missing `amplitude`"),
+        ("Wood { materialIndex 0 materialIndex 1 octaves 2 amplitude 3 }", "}", "Wood is missing `frequency`"),
+        ("Checkerboard { materialIndex 0 }", "}", "expected a second `materialIndex` in Checkerboard, found `}`"),
+        ("Checkerboard { materialIndex 0 materialIndex 1 octaves 2 }", "octaves", "unknown field `octaves`"),
+        (
+            "Noise { Transform { Sphere } materialIndex 0 materialIndex 1 octaves 1 }",
+            "Sphere",
+            "unknown transformation",
+        ),
+        ("Noise { materialIndex 0 materialIndex 1 octaves 65 }", "65", "octaves 65 is more than 64"),
+        ("Noise { materialIndex 0 materialIndex 1 octaves -1 }", "-1", "expected a non-negative integer"),
+    ];
+    for (line, needle, message) in cases {
+        assert_error_at(&with_textures(&[line]), 6, col(line, needle), message);
+    }
+    let twice = "Checkerboard { Transform { } Transform { } materialIndex 0 materialIndex 1 }";
+    assert_error_at(&with_textures(&[twice]), 6, col(twice, "Transform { } m"), "duplicate field `Transform`");
+    // The error names the file, the line and the column, as every scene error does.
+    let shown = parse_err(&with_textures(&["Checkerboard { }"])).to_string();
+    assert!(shown.starts_with("test.txt:6:16: "), "{shown}");
+}
+
+#[test]
+fn texture_nesting_is_bounded() {
+    use raycaster::scene::MAX_TEXTURE_NESTING;
+    // Material 2 is one texture deep; material 2 + d names material 1 + d, so it is d + 1 deep.
+    let chain = |depth: usize| -> Vec<String> {
+        let first = "Noise { materialIndex 0 materialIndex 1 octaves 1 }".to_string();
+        let rest = (3..2 + depth).map(|k| format!("Noise {{ materialIndex {} materialIndex 0 octaves 1 }}", k - 1));
+        std::iter::once(first).chain(rest).collect()
+    };
+    let lines = chain(MAX_TEXTURE_NESTING);
+    let deepest = parse(&with_textures(&lines.iter().map(String::as_str).collect::<Vec<_>>()));
+    assert_eq!(deepest.texture(1 + MAX_TEXTURE_NESTING as u32).unwrap().materials, [MAX_TEXTURE_NESTING as u32, 0]);
+    let lines = chain(MAX_TEXTURE_NESTING + 1);
+    let text = with_textures(&lines.iter().map(String::as_str).collect::<Vec<_>>());
+    // The texture one level too deep is on line 6 + MAX_TEXTURE_NESTING.
+    assert_error_at(&text, 6 + MAX_TEXTURE_NESTING as u32, 1, "textures nested 9 deep, more than 8");
+}

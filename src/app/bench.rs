@@ -279,6 +279,7 @@ pub fn mesh_scene(name: &str, mesh: Mesh) -> Scene {
         background: Background { color: DVec3::splat(0.2), ambient: DVec3::splat(0.1) },
         materials: vec![Material::diffuse(DVec3::splat(0.8))],
         material_locations: Vec::new(),
+        textures: Vec::new(),
         root: vec![Object {
             shape: Shape::Mesh { mesh: Arc::new(mesh), material: 0 },
             location: Default::default(),

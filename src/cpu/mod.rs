@@ -11,6 +11,7 @@
 
 mod intersect;
 mod prepared;
+pub mod texture;
 
 pub use intersect::{intersect_plane, intersect_sphere, intersect_triangle, sphere_normal, triangle_normal};
 pub use prepared::{Hit, ReferenceScene, SceneGrid, Surface};
@@ -165,14 +166,10 @@ impl<'a> Reference<'a> {
         }
     }
 
-    /// docs/SPEC.md §5: ambient times diffuse, plus for each light in file order (that no
-    /// shadow ray finds blocked, with `-shadows`) Lambert's cosine law and the
-    /// Blinn–Torrance specular lobe, plus the reflected and refracted rays' colours while
-    /// `path` may go deeper; a back-facing hit is black unless `shade_back`, which shades it
-    /// with the normal turned towards the viewer.
+    /// docs/SPEC.md §5: a back-facing hit is black unless `shade_back`, which shades it
+    /// with the normal turned towards the viewer; otherwise the hit's material, shaded.
     fn shade(&self, surface: &Surface, ray: &Ray, path: Path, stats: &mut RayStats) -> DVec3 {
         let facing = ray.direction.dot(surface.normal);
-        let entering = facing < 0.0;
         let mut normal = surface.normal;
         if facing > 0.0 {
             if !self.options.shading.shade_back {
@@ -180,8 +177,37 @@ impl<'a> Reference<'a> {
             }
             normal = -normal;
         }
+        let hit = Shaded { surface, normal, entering: facing < 0.0 };
+        self.shade_material(surface.material, &hit, ray, path, stats)
+    }
+
+    /// docs/SPEC.md §5: material `index` at the hit. A solid texture blends its two
+    /// materials' shaded colours (each with its own ambient, lights, reflection and
+    /// refraction, as the handout's update of 11/2 says) by its weight at the hit's world
+    /// point carried into texture space; a material with no weight there is not shaded.
+    fn shade_material(&self, index: u32, hit: &Shaded, ray: &Ray, path: Path, stats: &mut RayStats) -> DVec3 {
+        let Some(texture) = self.prepared.scene.texture(index) else {
+            return self.shade_phong(self.prepared.material(index), hit, ray, path, stats);
+        };
+        let weight = texture::first_material_weight(texture, texture.to_texture.transform_point3(hit.surface.point));
+        let [first, second] = texture.materials;
+        let mut color = DVec3::ZERO;
+        if weight > 0.0 {
+            color += weight * self.shade_material(first, hit, ray, path, stats);
+        }
+        if weight < 1.0 {
+            color += (1.0 - weight) * self.shade_material(second, hit, ray, path, stats);
+        }
+        color
+    }
+
+    /// docs/SPEC.md §5: ambient times diffuse, plus for each light in file order (that no
+    /// shadow ray finds blocked, with `-shadows`) Lambert's cosine law and the
+    /// Blinn–Torrance specular lobe, plus the reflected and refracted rays' colours while
+    /// `path` may go deeper.
+    fn shade_phong(&self, material: &Material, hit: &Shaded, ray: &Ray, path: Path, stats: &mut RayStats) -> DVec3 {
+        let Shaded { surface, normal, entering } = *hit;
         let scene = self.prepared.scene;
-        let material = self.prepared.material(surface.material);
         let mut color = scene.background.ambient * material.diffuse;
         for light in &scene.lights {
             let (to_light, light_color) = light_from(light, surface.point);
@@ -264,6 +290,14 @@ pub fn voxel_color(count: usize) -> DVec3 {
     // ⌈log₂ count⌉ − 1, at least 0: 1 and 2 → 0, 3 and 4 → 1, 5…8 → 2, …
     let band = (count.max(2) - 1).ilog2() as usize;
     BANDS[band.min(BANDS.len() - 1)]
+}
+
+/// A hit about to be shaded: its surface, the normal turned towards the viewer, and
+/// whether the ray enters the surface (hits its front).
+struct Shaded<'s> {
+    surface: &'s Surface,
+    normal: DVec3,
+    entering: bool,
 }
 
 /// Where a secondary ray is in the recursion of docs/SPEC.md §5.

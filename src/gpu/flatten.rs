@@ -27,6 +27,8 @@ pub struct SceneBuffers {
     pub planes: Vec<GpuPlane>,
     pub triangles: Vec<GpuTriangle>,
     pub materials: Vec<GpuMaterial>,
+    /// One per material when the scene has solid textures; empty otherwise.
+    pub textures: Vec<GpuTexture>,
     pub lights: Vec<GpuLight>,
     /// The hierarchy over spheres, ellipsoids and triangles, when the scene has enough of
     /// them to profit ([`BVH_MIN_PRIMITIVES`]).
@@ -99,6 +101,10 @@ impl SceneBuffers {
             buffers.triangles = bvh.order.iter().map(|&p| buffers.triangles[p as usize]).collect();
         }
         buffers.materials = scene.materials.iter().map(GpuMaterial::new).collect();
+        if scene.has_textures() {
+            buffers.textures =
+                (0..scene.materials.len() as u32).map(|k| GpuTexture::new(scene.texture(k), rays.center)).collect();
+        }
         buffers.lights = scene.lights.iter().map(|light| GpuLight::new(light, rays.center)).collect();
         buffers.params = Params {
             direction: f32x3(rays.direction),

@@ -135,6 +135,71 @@ impl GpuMaterial {
     }
 }
 
+/// WGSL `Texture`: one per material when the scene has solid textures (`kind` 0 for a
+/// Phong material), read only by kernels compiled with `TEXTURES`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuTexture {
+    /// The rows of the affine map from camera-relative world space to texture space: the
+    /// texture's Transform after the move back from the camera, composed in f64.
+    pub row0: [f32; 4],
+    pub row1: [f32; 4],
+    pub row2: [f32; 4],
+    /// [`TextureKind`](crate::scene::TextureKind) as 1 to 4 (in its order), 0: none.
+    pub kind: u32,
+    pub first: u32,
+    pub second: u32,
+    pub octaves: u32,
+    pub frequency: f32,
+    pub amplitude: f32,
+    pub _pad0: u32,
+    pub _pad1: u32,
+}
+
+impl GpuTexture {
+    /// Material `texture`'s entry (zeros for a Phong material) for a camera at `camera`.
+    pub fn new(texture: Option<&crate::scene::Texture>, camera: glam::DVec3) -> GpuTexture {
+        use crate::scene::TextureKind;
+        let Some(texture) = texture else { return GpuTexture::default() };
+        let map = texture.to_texture * glam::DMat4::from_translation(camera);
+        let row = |r: usize| map.row(r).as_vec4().to_array();
+        GpuTexture {
+            row0: row(0),
+            row1: row(1),
+            row2: row(2),
+            kind: match texture.kind {
+                TextureKind::Checkerboard => 1,
+                TextureKind::Noise => 2,
+                TextureKind::Marble => 3,
+                TextureKind::Wood => 4,
+            },
+            first: texture.materials[0],
+            second: texture.materials[1],
+            octaves: texture.octaves,
+            frequency: texture.frequency as f32,
+            amplitude: texture.amplitude as f32,
+            ..Default::default()
+        }
+    }
+}
+
+/// Perlin's published permutation of 0‥255 (Perlin 2002, "Improving Noise"; his
+/// `ImprovedNoise.java`), the kernel's `permutation` buffer. The kernel's own copy: the
+/// reference keeps another (`cpu::texture`), and a test holds the two equal.
+pub const PERLIN_PERMUTATION: [u32; 256] = [
+    151, 160, 137, 91, 90, 15, 131, 13, 201, 95, 96, 53, 194, 233, 7, 225, 140, 36, 103, 30, 69, 142, 8, 99, 37, 240,
+    21, 10, 23, 190, 6, 148, 247, 120, 234, 75, 0, 26, 197, 62, 94, 252, 219, 203, 117, 35, 11, 32, 57, 177, 33, 88,
+    237, 149, 56, 87, 174, 20, 125, 136, 171, 168, 68, 175, 74, 165, 71, 134, 139, 48, 27, 166, 77, 146, 158, 231, 83,
+    111, 229, 122, 60, 211, 133, 230, 220, 105, 92, 41, 55, 46, 245, 40, 244, 102, 143, 54, 65, 25, 63, 161, 1, 216,
+    80, 73, 209, 76, 132, 187, 208, 89, 18, 169, 200, 196, 135, 130, 116, 188, 159, 86, 164, 100, 109, 198, 173, 186,
+    3, 64, 52, 217, 226, 250, 124, 123, 5, 202, 38, 147, 118, 126, 255, 82, 85, 212, 207, 206, 59, 227, 47, 16, 58, 17,
+    182, 189, 28, 42, 223, 183, 170, 213, 119, 248, 152, 2, 44, 154, 163, 70, 221, 153, 101, 155, 167, 43, 172, 9, 129,
+    22, 39, 253, 19, 98, 108, 110, 79, 113, 224, 232, 178, 185, 112, 104, 218, 246, 97, 228, 251, 34, 242, 193, 238,
+    210, 144, 12, 191, 179, 162, 241, 81, 51, 145, 235, 249, 14, 239, 107, 49, 192, 214, 31, 181, 199, 106, 157, 184,
+    84, 204, 176, 115, 121, 50, 45, 127, 4, 150, 254, 138, 236, 205, 93, 222, 114, 67, 29, 24, 72, 243, 141, 128, 195,
+    78, 66, 215, 61, 156, 180,
+];
+
 /// WGSL `Light`: a directional light (`is_point` 0, the unit vector toward the light) or
 /// a point light (`is_point` 1, its camera-relative position and attenuation).
 #[repr(C)]

@@ -15,6 +15,7 @@ pub mod precision;
 mod prepared;
 pub mod shader;
 pub mod support;
+pub mod texture_range;
 pub mod tree;
 
 use crate::render::{Frame, Output, RenderOptions, SphereTest, TriangleTest};
@@ -145,6 +146,8 @@ pub struct KernelConfig {
     pub use_bvh: bool,
     pub use_bins: bool,
     pub use_grid: bool,
+    /// Some material is a solid texture (`shaders/texture.wgsl`).
+    pub textures: bool,
 }
 
 impl KernelConfig {
@@ -179,9 +182,10 @@ impl KernelConfig {
             use_bvh: buffers.bvh.is_some(),
             use_bins: buffers.bins.is_some(),
             use_grid: buffers.grid.is_some(),
+            textures: !buffers.textures.is_empty(),
         };
         // Every pixel, whatever it casts: a hierarchy that cannot cull (slivers across the
-        // view), a crowded bin or a flat loop passes the limit on primary rays alone.
+        // view), a crowded bin, a flat loop or a texture's blend passes the limit.
         config.loop_canary = loop_limit;
         config
     }
@@ -211,7 +215,7 @@ impl KernelConfig {
     }
 
     /// The values for `PipelineCompilationOptions::constants`.
-    pub fn constants(&self) -> [(&'static str, f64); 23] {
+    pub fn constants(&self) -> [(&'static str, f64); 24] {
         let b = |v: bool| if v { 1.0 } else { 0.0 };
         [
             ("HAS_SPHERES", b(self.has_spheres)),
@@ -237,6 +241,7 @@ impl KernelConfig {
             ("USE_BVH", b(self.use_bvh)),
             ("USE_BINS", b(self.use_bins)),
             ("USE_GRID", b(self.use_grid)),
+            ("TEXTURES", b(self.textures)),
         ]
     }
 }
@@ -257,7 +262,7 @@ const fn binding<T>(name: &'static str, writable: bool) -> Binding {
 /// Every binding of the kernel (`shaders/params.wgsl`), index = `@binding`. The bind-group layout and
 /// every bind group are built from this table, and `tests/layout.rs` checks it against the
 /// shader's own declarations (names, order, access, element sizes).
-pub const BINDINGS: [Binding; 13] = [
+pub const BINDINGS: [Binding; 15] = [
     binding::<layout::Params>("params", false),
     binding::<layout::GpuSphere>("spheres", false),
     binding::<layout::GpuEllipsoid>("ellipsoids", false),
@@ -271,6 +276,8 @@ pub const BINDINGS: [Binding; 13] = [
     binding::<layout::EyeTriangle>("eye_triangles", false),
     binding::<[u32; 2]>("bin_ranges", false),
     binding::<layout::BinItem>("bin_items", false),
+    binding::<layout::GpuTexture>("textures", false),
+    binding::<u32>("permutation", false),
 ];
 
 /// Kernels a renderer keeps compiled (see [`GpuRenderer::pipeline`]).

@@ -106,6 +106,8 @@ pub struct PrecisionError {
     /// Its magnitude, camera-relative and after transforms (NaN or infinite if f64 itself
     /// overflowed computing it); for [`Limit::Resolution`], the ratio R.
     pub magnitude: f64,
+    /// The range it left, in words ([`RANGE`], or a texture's, [`super::texture_range`]).
+    pub range: String,
     /// Which promise the value breaks.
     pub limit: Limit,
 }
@@ -120,16 +122,19 @@ pub enum Limit {
     Resolution { triangles: bool },
 }
 
+/// The range of every magnitude but textures', in words.
+pub const RANGE: &str = "0 or 2^-25 to 2^28, with the camera at the origin";
+
 impl fmt::Display for PrecisionError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write_place(f, &self.file, self.location)?;
         match self.limit {
             Limit::Range => write!(
                 f,
-                ": {}: magnitude {} is outside the range the GPU's f32 kernel renders faithfully \
-                 (0 or 2^-25 to 2^28, with the camera at the origin)",
+                ": {}: magnitude {} is outside the range the GPU's f32 kernel renders faithfully ({})",
                 self.what,
-                show(self.magnitude)
+                show(self.magnitude),
+                self.range
             ),
             Limit::Resolution { triangles } => write!(
                 f,
@@ -209,7 +214,7 @@ pub fn check(scene: &Scene, options: &RenderOptions) -> Result<(), PrecisionErro
     };
     let triangles = checker.triangles.get();
     if resolution <= if triangles { MAX_RESOLUTION_TRIANGLES } else { MAX_RESOLUTION_SMOOTH } {
-        return Ok(());
+        return super::texture_range::check(scene, options);
     }
     let what = if rays.orthographic { "OrthographicCamera size" } else { "PerspectiveCamera angle" };
     Err(PrecisionError {
@@ -217,6 +222,7 @@ pub fn check(scene: &Scene, options: &RenderOptions) -> Result<(), PrecisionErro
         location: Some(scene.camera.location),
         what: what.to_string(),
         magnitude: resolution,
+        range: String::new(),
         limit: Limit::Resolution { triangles },
     })
 }
@@ -251,6 +257,7 @@ impl Checker<'_> {
             location,
             what: what.to_string(),
             magnitude,
+            range: RANGE.to_string(),
             limit: Limit::Range,
         }
     }
@@ -374,6 +381,7 @@ impl Checker<'_> {
                     what: format!("mesh vertex {}", k + 1),
                     magnitude,
                     limit: Limit::Range,
+                    range: RANGE.to_string(),
                 },
                 None => self.error(
                     Some(at),
@@ -387,7 +395,7 @@ impl Checker<'_> {
 }
 
 /// A magnitude in short scientific notation: `1e39`, `2.684e8`.
-fn show(value: f64) -> String {
+pub(super) fn show(value: f64) -> String {
     let text = format!("{value:.3e}");
     match text.split_once('e') {
         Some((mantissa, exponent)) if mantissa.contains('.') => {

@@ -6,7 +6,7 @@
 //! (decoding, quantising, writing files) overlaps the device's instead of following it.
 
 use super::flatten::SceneBuffers;
-use super::layout::{Params, PixelLayout, PACKED_MISS};
+use super::layout::{Params, PixelLayout, PACKED_MISS, PERLIN_PERMUTATION};
 use super::{GpuError, GpuRenderer, KernelConfig, RenderStats, Timer, BINDINGS, OUTPUT_BINDING, WORKGROUP};
 use crate::render::{row_tiles, Frame, Output, RenderOptions};
 use crate::scene::Scene;
@@ -310,6 +310,8 @@ fn upload_inputs(
         Some(non_empty(bins.map_or(&[][..], |b| &b.eye_triangles))),
         Some(non_empty(ranges)),
         Some(non_empty(bins.map_or(&[][..], |b| &b.items))),
+        Some(non_empty(&buffers.textures)),
+        Some(non_empty(if buffers.textures.is_empty() { &[][..] } else { &PERLIN_PERMUTATION[..] })),
     ];
     let mut out: [Option<wgpu::Buffer>; BINDINGS.len()] = Default::default();
     for (k, bytes) in contents.iter().enumerate() {
@@ -333,7 +335,7 @@ fn upload_inputs(
 /// A zero-sized buffer cannot be bound, so an empty list is uploaded as one zeroed element
 /// (the kernel reads only as many as `Params` counts).
 fn non_empty<T: bytemuck::Pod>(items: &[T]) -> &[u8] {
-    const ZEROS: [u8; 64] = [0; 64];
+    const ZEROS: [u8; 128] = [0; 128];
     if items.is_empty() {
         &ZEROS[..std::mem::size_of::<T>()]
     } else {

@@ -20,15 +20,16 @@ use std::sync::OnceLock;
 /// - `bins.wgsl`: primary-ray triangles and the packet's walk of a bin;
 /// - `grid.wgsl`: the 3D-DDA through the `-grid`'s cells, nearest and any hit;
 /// - `occluded.wgsl`: the any-hit query;
-/// - `surface.wgsl`, `shading.wgsl`, `tree.wgsl`, `output.wgsl`: the nearest hit's surface
-///   and where rays leaving it start, its directly lit colour, the reflected and refracted
-///   rays' colours, the words it leaves in the output;
+/// - `surface.wgsl`, `texture.wgsl`, `shading.wgsl`, `tree.wgsl`, `output.wgsl`: the nearest hit's surface
+///   and where rays leaving it start, solid textures (Perlin's improved noise), its directly
+///   lit colour, the reflected and refracted rays' colours, the words it leaves in the
+///   output;
 /// - `entry.wgsl`: `main` and `main_bins`.
 ///
 /// Plain concatenation, not a composer such as naga_oil: nothing is resolved at run time,
 /// no dependency is added, and naga sees one module as it did when the kernel was one file
 /// (lavapipe's compile time, measured with an empty shader cache, did not change).
-pub const FILES: [(&str, &str); 17] = [
+pub const FILES: [(&str, &str); 18] = [
     ("params.wgsl", include_str!("../../shaders/params.wgsl")),
     ("ray.wgsl", include_str!("../../shaders/ray.wgsl")),
     ("camera.wgsl", include_str!("../../shaders/camera.wgsl")),
@@ -42,6 +43,7 @@ pub const FILES: [(&str, &str); 17] = [
     ("grid.wgsl", include_str!("../../shaders/grid.wgsl")),
     ("occluded.wgsl", include_str!("../../shaders/occluded.wgsl")),
     ("surface.wgsl", include_str!("../../shaders/surface.wgsl")),
+    ("texture.wgsl", include_str!("../../shaders/texture.wgsl")),
     ("shading.wgsl", include_str!("../../shaders/shading.wgsl")),
     ("tree.wgsl", include_str!("../../shaders/tree.wgsl")),
     ("output.wgsl", include_str!("../../shaders/output.wgsl")),
@@ -61,6 +63,11 @@ pub fn host_constants() -> String {
         ("TREE_STACK", super::tree::TREE_STACK, "rays waiting in a ray tree (gpu::tree::TREE_STACK)"),
         ("CUT_SHORT_HIT", super::layout::CUT_SHORT_HIT, "hit word of a pixel cut short (gpu::layout)"),
         ("CUT_SHORT_WORD", super::layout::CUT_SHORT_WORD, "first packed word of a pixel cut short (gpu::layout)"),
+        (
+            "BLEND_STACK",
+            crate::scene::MAX_TEXTURE_NESTING as u32 + 1,
+            "materials waiting in a texture's blend (scene::MAX_TEXTURE_NESTING + 1)",
+        ),
     ];
     for (name, value, what) in sizes {
         let _ = writeln!(out, "// {what}\nconst {name}: u32 = {value}u;");

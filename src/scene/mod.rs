@@ -16,5 +16,5 @@ pub mod walk;
 pub use error::{SceneError, SceneWarning};
 pub use model::*;
 pub use obj::{load_obj, parse_obj};
-pub use parser::{load_scene, parse_scene, MAX_NESTING};
+pub use parser::{load_scene, parse_scene, MAX_NESTING, MAX_OCTAVES, MAX_TEXTURE_NESTING};
 pub use walk::{for_each_leaf, try_for_each_leaf, Leaf};

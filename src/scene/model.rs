@@ -29,6 +29,11 @@ pub struct Scene {
     /// to `materials`, for later stages that refuse a term; empty for scenes not read
     /// from a file.
     pub material_locations: Vec<Location>,
+    /// The solid textures (GRAMMAR.md A6), parallel to `materials`: `textures[k]` is the
+    /// texture material k is, if any; empty when the scene has none. A texture's own entry
+    /// in `materials` is its first material's Phong terms, the course's OpenGL stand-in
+    /// (`glSetMaterial` delegates to the first material), never shaded by the reference.
+    pub textures: Vec<Option<Texture>>,
     /// The objects of the top-level `Group`.
     pub root: Vec<Object>,
     /// Non-fatal remarks made while reading (no lights, ...).
@@ -211,6 +216,55 @@ impl Material {
     /// A material with this diffuse colour and the defaults elsewhere.
     pub fn diffuse(color: DVec3) -> Material {
         Material { diffuse: color, ..Material::default() }
+    }
+}
+
+/// A solid texture (GRAMMAR.md A6, docs/SPEC.md §5): a blend of two earlier materials,
+/// evaluated at the hit's world point carried into texture space by `to_texture`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Texture {
+    pub kind: TextureKind,
+    /// World → texture space (`Transform { … }` of the block; identity when absent).
+    pub to_texture: DMat4,
+    /// The two `materialIndex` entries, both earlier in the list than this material.
+    pub materials: [u32; 2],
+    /// `octaves` of the noise sum (0 for `Checkerboard`, which has none).
+    pub octaves: u32,
+    /// `frequency` of Marble and Wood (0 elsewhere).
+    pub frequency: f64,
+    /// `amplitude` of Marble and Wood (0 elsewhere).
+    pub amplitude: f64,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TextureKind {
+    Checkerboard,
+    Noise,
+    Marble,
+    Wood,
+}
+
+impl TextureKind {
+    /// The block's keyword in the scene file.
+    pub fn keyword(self) -> &'static str {
+        match self {
+            TextureKind::Checkerboard => "Checkerboard",
+            TextureKind::Noise => "Noise",
+            TextureKind::Marble => "Marble",
+            TextureKind::Wood => "Wood",
+        }
+    }
+}
+
+impl Scene {
+    /// The texture material `index` is, if it is one.
+    pub fn texture(&self, index: u32) -> Option<&Texture> {
+        self.textures.get(index as usize).and_then(Option::as_ref)
+    }
+
+    /// Whether any material is a solid texture.
+    pub fn has_textures(&self) -> bool {
+        self.textures.iter().any(Option::is_some)
     }
 }
 

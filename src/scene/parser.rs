@@ -10,7 +10,8 @@
 use super::error::{SceneError, SceneWarning};
 use super::lexer::{describe, parse_count, parse_decimal, read_source, Lexer, Token};
 use super::model::{
-    Background, Camera, DirectionalLight, Light, Location, Material, Mesh, Object, PointLight, Projection, Scene, Shape,
+    Background, Camera, DirectionalLight, Light, Location, Material, Mesh, Object, PointLight, Projection, Scene,
+    Shape, Texture, TextureKind,
 };
 use super::obj::load_obj;
 use glam::{DMat3, DMat4, DVec3, DVec4};
@@ -50,6 +51,19 @@ const OBJECT_KEYWORDS: [&str; 6] = ["Group", "Sphere", "Plane", "Triangle", "Tri
 const GROUP_ITEMS: &str = "`}`, MaterialIndex or an object (Group, Sphere, Plane, Triangle, TriangleMesh, Transform)";
 const TRANSFORM_ITEMS: &str = "a transformation (Scale, UniformScale, Translate, XRotate, YRotate, \
      ZRotate, Rotate, Matrix) or an object (Group, Sphere, Plane, Triangle, TriangleMesh, Transform)";
+const TRANSFORMATIONS: [&str; 8] =
+    ["Scale", "UniformScale", "Translate", "XRotate", "YRotate", "ZRotate", "Rotate", "Matrix"];
+const MATERIAL_KINDS: &str = "`}`, Material, PhongMaterial, Checkerboard, Noise, Marble or Wood";
+
+/// The most `octaves` a noise sum may have: octave k adds at most 2⁻ᵏ of the first one's
+/// size, so beyond 64 it changes nothing an f64 can hold, and a huge count would only stall
+/// the render.
+pub const MAX_OCTAVES: u64 = 64;
+
+/// The deepest chain of textures naming textures: each level may shade both of its
+/// materials, so one hit can cost 2^depth Phong shadings. The course nests two deep.
+pub const MAX_TEXTURE_NESTING: usize = 8;
+
 const PHONG_FIELDS: [&str; 6] =
     ["diffuseColor", "specularColor", "exponent", "transparentColor", "reflectiveColor", "indexOfRefraction"];
 
@@ -59,11 +73,15 @@ struct TopLevel {
     camera: Option<Camera>,
     lights: Option<Vec<Light>>,
     background: Option<BackgroundBlock>,
-    materials: Option<Vec<(Material, Location)>>,
+    materials: Option<Vec<MaterialEntry>>,
     root: Option<Vec<Object>>,
     /// Block kind and keyword location, to report duplicates.
     seen: Vec<(&'static str, Location)>,
 }
+
+/// One entry of the `Materials` block: its Phong terms (a texture's stand-in, see
+/// [`Scene::textures`]), its texture if it is one, and where its keyword was written.
+type MaterialEntry = (Material, Option<Texture>, Location);
 
 struct BackgroundBlock {
     background: Background,
@@ -362,8 +380,13 @@ impl<'a> Parser<'a> {
         let camera = blocks.camera.ok_or_else(|| {
             SceneError::in_file(self.path, "no camera: expected an OrthographicCamera or PerspectiveCamera block")
         })?;
-        let (materials, material_locations): (Vec<Material>, Vec<Location>) =
-            blocks.materials.unwrap_or_default().into_iter().unzip();
+        let entries = blocks.materials.unwrap_or_default();
+        let materials: Vec<Material> = entries.iter().map(|entry| entry.0).collect();
+        let material_locations = entries.iter().map(|entry| entry.2).collect();
+        let mut textures: Vec<Option<Texture>> = entries.iter().map(|entry| entry.1).collect();
+        if textures.iter().all(Option::is_none) {
+            textures.clear();
+        }
         self.check_material_refs(materials.len())?;
         let lights = blocks.lights.unwrap_or_default();
         let mut background =
@@ -381,6 +404,7 @@ impl<'a> Parser<'a> {
             background: background.background,
             materials,
             material_locations,
+            textures,
             root: blocks.root.unwrap_or_default(),
             warnings: self.warnings,
         })
@@ -541,8 +565,8 @@ impl<'a> Parser<'a> {
         Ok(BackgroundBlock { background, ambient_given })
     }
 
-    fn materials(&mut self, keyword: Token<'a>) -> Result<Vec<(Material, Location)>> {
-        const ITEMS: &str = "`}`, Material or PhongMaterial";
+    fn materials(&mut self, keyword: Token<'a>) -> Result<Vec<MaterialEntry>> {
+        const ITEMS: &str = MATERIAL_KINDS;
         self.open(keyword)?;
         let mut count = self.count_field(keyword, "numMaterials", "materials")?;
         let mut materials = Vec::new();
@@ -555,7 +579,15 @@ impl<'a> Parser<'a> {
                 }
                 "Material" | "PhongMaterial" => {
                     self.check_extra(&mut count, token)?;
-                    materials.push((self.material(token)?, token.location));
+                    materials.push((self.material(token)?, None, token.location));
+                }
+                "Checkerboard" | "Noise" | "Marble" | "Wood" => {
+                    self.check_extra(&mut count, token)?;
+                    let texture = self.texture(token, materials.len())?;
+                    self.check_texture_nesting(&texture, &materials, token)?;
+                    // The course's OpenGL preview shows a texture as its first material.
+                    let stand_in = materials[texture.materials[0] as usize].0;
+                    materials.push((stand_in, Some(texture), token.location));
                 }
                 _ => return Err(self.unknown(token, "material", ITEMS)),
             }
@@ -579,6 +611,127 @@ impl<'a> Parser<'a> {
             Ok(())
         })?;
         Ok(material)
+    }
+
+    /// A solid texture block (GRAMMAR.md A6) that will be material `index`: an optional
+    /// `Transform { … }`, `materialIndex I materialIndex J` naming earlier materials, and
+    /// the kind's numbers (`octaves`; Marble and Wood also `frequency`, `amplitude`), each
+    /// once, in any order.
+    fn texture(&mut self, keyword: Token<'a>, index: usize) -> Result<Texture> {
+        let kind = match keyword.text {
+            "Checkerboard" => TextureKind::Checkerboard,
+            "Noise" => TextureKind::Noise,
+            "Marble" => TextureKind::Marble,
+            _ => TextureKind::Wood,
+        };
+        let fields: &[&'static str] = match kind {
+            TextureKind::Checkerboard => &["Transform", "materialIndex"],
+            TextureKind::Noise => &["Transform", "materialIndex", "octaves"],
+            TextureKind::Marble | TextureKind::Wood => {
+                &["Transform", "materialIndex", "octaves", "frequency", "amplitude"]
+            }
+        };
+        let mut texture = Texture {
+            kind,
+            to_texture: DMat4::IDENTITY,
+            materials: [0; 2],
+            octaves: 0,
+            frequency: 0.0,
+            amplitude: 0.0,
+        };
+        let (mut pair, mut octaves, mut frequency, mut amplitude) = (None, None, None, None);
+        let close = self.fields_block(keyword, fields, |p, field| {
+            match field.text {
+                "Transform" => texture.to_texture = p.texture_transform(field)?,
+                "materialIndex" => pair = Some(p.texture_materials(keyword, index)?),
+                "octaves" => octaves = Some(p.octaves()?),
+                "frequency" => frequency = Some(p.number()?.0),
+                _ => amplitude = Some(p.number()?.0),
+            }
+            Ok(())
+        })?;
+        texture.materials = self.required(pair, keyword, "materialIndex", close)?;
+        if kind != TextureKind::Checkerboard {
+            texture.octaves = self.required(octaves, keyword, "octaves", close)?;
+        }
+        if matches!(kind, TextureKind::Marble | TextureKind::Wood) {
+            texture.frequency = self.required(frequency, keyword, "frequency", close)?;
+            texture.amplitude = self.required(amplitude, keyword, "amplitude", close)?;
+        }
+        Ok(texture)
+    }
+
+    fn check_texture_nesting(&self, texture: &Texture, earlier: &[MaterialEntry], keyword: Token) -> Result<()> {
+        let depth = texture_depth(texture, earlier);
+        if depth > MAX_TEXTURE_NESTING {
+            return Err(self.error(
+                keyword.location,
+                format!(
+                    "textures nested {depth} deep, more than {MAX_TEXTURE_NESTING}: each level may shade both \
+                     of its materials, so a hit would cost up to 2^{depth} shadings"
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    /// `{ transformation* }` after a texture's `Transform`: the world → texture matrix,
+    /// composed as an object's Transform composes. It need not be invertible: nothing maps
+    /// back from texture space.
+    fn texture_transform(&mut self, keyword: Token<'a>) -> Result<DMat4> {
+        const EXPECTED: &str = "`}` or a transformation (Scale, UniformScale, Translate, XRotate, YRotate, \
+             ZRotate, Rotate, Matrix)";
+        self.open(keyword)?;
+        let mut matrix = DMat4::IDENTITY;
+        loop {
+            let token = self.expect(EXPECTED)?;
+            if token.text == "}" {
+                return Ok(matrix);
+            }
+            if !TRANSFORMATIONS.contains(&token.text) {
+                return Err(self.unknown_in(token, "transformation", "a texture's Transform", EXPECTED));
+            }
+            match self.transformation(token)? {
+                Compose::After(step) => matrix *= step,
+                Compose::Before(step) => matrix = step * matrix,
+            }
+        }
+    }
+
+    /// `I materialIndex J` after the first `materialIndex` of the texture that will be
+    /// material `index`: both must name materials before it (the course asserts this).
+    fn texture_materials(&mut self, keyword: Token<'a>, index: usize) -> Result<[u32; 2]> {
+        let first = self.earlier_material(keyword, index)?;
+        let token = self.expect("a second `materialIndex`")?;
+        if token.text != "materialIndex" {
+            return Err(self.unexpected(token, &format!("a second `materialIndex` in {}", keyword.text)));
+        }
+        Ok([first, self.earlier_material(keyword, index)?])
+    }
+
+    fn earlier_material(&mut self, keyword: Token<'a>, index: usize) -> Result<u32> {
+        let (value, location) = self.count_value()?;
+        if value >= index as u64 {
+            return Err(self.error(
+                location,
+                format!(
+                    "materialIndex {value} must name an earlier material: this {} is material {index}",
+                    keyword.text
+                ),
+            ));
+        }
+        Ok(value as u32)
+    }
+
+    fn octaves(&mut self) -> Result<u32> {
+        let (value, location) = self.count_value()?;
+        if value > MAX_OCTAVES {
+            return Err(self.error(
+                location,
+                format!("octaves {value} is more than {MAX_OCTAVES}: the octaves beyond add nothing an f64 holds"),
+            ));
+        }
+        Ok(value as u32)
     }
 
     // ---- objects ----
@@ -883,6 +1036,12 @@ impl<'a> Parser<'a> {
 /// is 0 or tiny relative to its largest entry (|det| ≤ 1e-12·max³, tested on the matrix
 /// divided by max so that the test itself cannot overflow), or entries or a determinant
 /// that f64 cannot hold (the renderers compute `M⁻¹` through `1/det`).
+/// How many textures deep `texture` goes: 1, plus the deepest of its materials' depths.
+fn texture_depth(texture: &Texture, earlier: &[MaterialEntry]) -> usize {
+    let below = texture.materials.iter().filter_map(|&m| earlier[m as usize].1.as_ref());
+    1 + below.map(|t| texture_depth(t, earlier)).max().unwrap_or(0)
+}
+
 fn singularity(matrix: &DMat4) -> Option<String> {
     let linear = DMat3::from_mat4(*matrix);
     let determinant = linear.determinant();
