@@ -11,6 +11,7 @@ use crate::app::memory;
 use glam::DVec3;
 use raycaster::cpu::Reference;
 use raycaster::gpu::{Acceleration, GpuError, GpuOptions, GpuRenderer};
+use raycaster::grid::GridSize;
 use raycaster::metrics::{compare_frames, depth_range_of, OutputErrors};
 use raycaster::render::{Frame, Output, Pixel, RenderOptions, Shading, TriangleTest};
 use raycaster::scene::{
@@ -31,6 +32,12 @@ pub struct Case {
     pub acceleration: Acceleration,
     /// Shadows, bounces and the rest (the course's flags on its A4 lines).
     pub shading: Shading,
+    /// The GPU's `-grid` (with [`Acceleration::Grid`]).
+    pub grid: Option<GridSize>,
+    /// The grid the reference walks to check the row: the course line's own, whatever the
+    /// GPU uses, so that a 40 000-triangle mesh with shadows takes it seconds, not minutes
+    /// (its images are the same with and without a grid: tests/grid.rs).
+    pub reference_grid: Option<GridSize>,
 }
 
 impl Case {
@@ -134,8 +141,10 @@ pub fn run_case(gpu: &GpuRenderer, case: &Case, runs: usize) -> Result<Row, GpuE
     let options = RenderOptions {
         triangle_test: case.triangle_test,
         shading: case.shading,
+        grid: case.grid,
         ..RenderOptions::all(case.width, case.height)
     };
+    let reference_options = RenderOptions { grid: case.reference_grid.or(case.grid), ..options };
     let gpu = &gpu.on_same_device(GpuOptions { acceleration: case.acceleration, ..*gpu.options() });
     let counts = case.scene.primitive_counts();
     // Secondary rays: every pixel is compared (and the reference's time is part of the row).
@@ -167,7 +176,7 @@ pub fn run_case(gpu: &GpuRenderer, case: &Case, runs: usize) -> Result<Row, GpuE
     }
     let peak_mib = memory::peak_mib();
     let positions: Vec<(u32, u32)> = gpu_samples.iter().map(|s: &Sample| s.position).collect();
-    let reference_renderer = Reference::new(&case.scene, &options);
+    let reference_renderer = Reference::new(&case.scene, &reference_options);
     let start = Instant::now();
     let reference = reference_renderer.pixels(&positions);
     let reference_ms = case.secondary_rays().then(|| start.elapsed().as_secs_f64() * 1e3);
@@ -306,6 +315,8 @@ pub fn standard_cases(corpus: &Path, quick: bool) -> Result<Vec<Case>, scene::Sc
         triangle_test: TriangleTest::default(),
         acceleration: Acceleration::Auto,
         shading: Shading::default(),
+        grid: None,
+        reference_grid: None,
     };
     let mut cases = Vec::new();
     if quick {
@@ -313,7 +324,7 @@ pub fn standard_cases(corpus: &Path, quick: bool) -> Result<Vec<Case>, scene::Sc
             cases.push(case(name, scene::load_scene(&course.join(format!("{name}.txt")))?, 64));
         }
         cases.push(case("bunny_1k", mesh_scene("bunny_1k", scene::load_obj(&course.join("bunny_1k.obj"))?), 64));
-        cases.extend(course_a4_cases(corpus, &["output4_04d"], 64)?);
+        cases.extend(course_line_cases(corpus, "a4", &["output4_04d"], 64)?);
         return Ok(cases);
     }
     let mut course_files: Vec<PathBuf> = std::fs::read_dir(&course)
@@ -353,7 +364,8 @@ pub fn standard_cases(corpus: &Path, quick: bool) -> Result<Vec<Case>, scene::Sc
     for test in [TriangleTest::Cramer, TriangleTest::Moller] {
         cases.push(Case { triangle_test: test, ..case("bunny_40k", bunny.clone(), 2048) });
     }
-    cases.extend(course_a4_cases(corpus, A4_LINES, 200)?);
+    cases.extend(course_line_cases(corpus, "a4", A4_LINES, 200)?);
+    cases.extend(grid_comparison(corpus)?);
     // The design choice measured in the same run: each way of finding candidates.
     for acceleration in [Acceleration::Bins, Acceleration::Hierarchy] {
         for (name, scene) in [("bunny_40k", &bunny), (icosphere_name.as_str(), &icosphere)] {
@@ -379,10 +391,46 @@ const A4_LINES: &[&str] = &[
     "output4_14f",
 ];
 
-/// The course's A4 command lines named in `lines` (by their `-output`), as cases at
-/// `size`² with the line's shading flags; none where the course's files have no `a4/`.
-fn course_a4_cases(corpus: &Path, lines: &[&str], size: u32) -> Result<Vec<Case>, scene::SceneError> {
-    let folder = corpus.join("a4");
+/// The lines of the course's `a6/commands.txt` whose scenes the bench renders with each
+/// way of finding candidates, the course's comparison: bunnies of 200, 5000 and 40 000
+/// triangles (the last two with shadows), the mirrored floor (one bounce) and the faceted
+/// gem (five bounces), each with its line's `-grid`.
+const A6_GRID_LINES: &[&str] = &["output6_04b", "output6_06", "output6_07", "output6_11b", "output6_12b"];
+
+/// Primitives up to which the grid comparison has a flat-loops row: scene6_06's 5001 took
+/// 25 s of kernel time on lavapipe, more than the rest of the comparison together.
+const FLAT_COMPARED_UP_TO: usize = 1000;
+
+/// Each of [`A6_GRID_LINES`] with the course's grid, the hierarchy, flat loops (up to
+/// [`FLAT_COMPARED_UP_TO`] primitives) and, for primary rays only, bins; the reference
+/// checks every row through the line's grid.
+fn grid_comparison(corpus: &Path) -> Result<Vec<Case>, scene::SceneError> {
+    let mut cases = Vec::new();
+    for line in course_line_cases(corpus, "a6", A6_GRID_LINES, 200)? {
+        let flat_fits = line.scene.primitive_counts().total() <= FLAT_COMPARED_UP_TO;
+        let mut accelerations = vec![Acceleration::Grid, Acceleration::Hierarchy];
+        accelerations.extend(flat_fits.then_some(Acceleration::Flat));
+        accelerations.extend((!line.secondary_rays()).then_some(Acceleration::Bins));
+        for acceleration in accelerations {
+            let grid = line.grid.filter(|_| acceleration == Acceleration::Grid);
+            cases.push(Case {
+                name: line.name.clone(),
+                scene: line.scene.clone(),
+                acceleration,
+                grid,
+                reference_grid: line.grid,
+                ..line
+            });
+        }
+    }
+    Ok(cases)
+}
+
+/// The command lines of the course's `folder` (`a4`, `a6`) named in `lines` (by their
+/// `-output`), as cases at `size`² with the line's shading flags and `-grid`; none where the
+/// course's files lack the folder.
+fn course_line_cases(corpus: &Path, folder: &str, lines: &[&str], size: u32) -> Result<Vec<Case>, scene::SceneError> {
+    let folder = corpus.join(folder);
     let commands = folder.join("commands.txt");
     let Ok(text) = std::fs::read_to_string(&commands) else { return Ok(Vec::new()) };
     let mut cases = Vec::new();
@@ -401,6 +449,10 @@ fn course_a4_cases(corpus: &Path, lines: &[&str], size: u32) -> Result<Vec<Case>
             weight: number("-weight").unwrap_or(0.0),
             ..Shading::default()
         };
+        let grid = words.iter().position(|w| *w == "-grid").and_then(|k| {
+            let n = |i: usize| words.get(k + i).and_then(|v| v.parse::<u32>().ok());
+            Some(GridSize { nx: n(1)?, ny: n(2)?, nz: n(3)? })
+        });
         let input = after("-input").ok_or_else(|| scene::SceneError::in_file(&commands, "a line without -input"))?;
         cases.push(Case {
             name: name.to_string(),
@@ -408,8 +460,10 @@ fn course_a4_cases(corpus: &Path, lines: &[&str], size: u32) -> Result<Vec<Case>
             width: size,
             height: size,
             triangle_test: TriangleTest::default(),
-            acceleration: Acceleration::Auto,
+            acceleration: if grid.is_some() { Acceleration::Grid } else { Acceleration::Auto },
             shading,
+            grid,
+            reference_grid: grid,
         });
     }
     Ok(cases)
