@@ -11,7 +11,9 @@
 //! diffuse term and directional lights of assignment 2; the Phong specular lobe of 3; point
 //! lights with attenuation, shadows, mirror reflection and refraction of 4, with the shading
 //! flags (`-shade_back`, `--specular-fix`, `-shadows`, `-bounces 0..4`, `-weight`) drawn per
-//! case. One case in fifty also gets solid textures of assignment 6 (Checkerboard, Noise,
+//! case. One case in eight walks a `-grid` of 1 to 11 cells a side on both backends (the
+//! reference's images are the same with or without one: tests/grid.rs), so the kernel's
+//! grid meets every primitive, transform and ray kind here. One case in fifty also gets solid textures of assignment 6 (Checkerboard, Noise,
 //! Marble, Wood, under a scale and a turn, blending earlier materials, textures included).
 //! The kernel refuses by design a texture whose coordinates leave its f32 contract (a
 //! textured plane in perspective, say) or that blends a mirror under `-bounces`: such a
@@ -36,6 +38,7 @@ mod common;
 use proptest::prelude::*;
 use proptest::test_runner::{Config, FileFailurePersistence, RngAlgorithm, TestError, TestRng, TestRunner};
 use raycaster::gpu::{GpuError, GpuRenderer};
+use raycaster::grid::GridSize;
 use raycaster::metrics::{compare_frames, depth_range_of};
 use raycaster::render::{RenderOptions, Shading};
 use raycaster::scene::{generate, load_scene, Scene};
@@ -82,6 +85,9 @@ struct SceneSpec {
     assignment: Assignment,
     /// The command line's shading flags (docs/SPEC.md §1).
     shading: Shading,
+    /// `-grid NX NY NZ`, one case in eight: the GPU's grid walk (shaders/grid.wgsl) against
+    /// the reference's own (src/grid.rs), primary, shadow and secondary rays alike.
+    grid: Option<GridSize>,
     camera: CameraSpec,
     lights: Vec<LightSpec>,
     background: Option<(V3, V3)>,
@@ -445,11 +451,19 @@ fn assignment() -> impl Strategy<Value = Assignment> {
     prop_oneof![16 => Just(Assignment::A2), 1 => Just(Assignment::A3), 1 => Just(Assignment::A4)]
 }
 
+/// No grid in most cases; otherwise 1 to 11 cells along each axis, as uneven as the course's.
+fn grid() -> impl Strategy<Value = Option<GridSize>> {
+    prop_oneof![
+        7 => Just(None),
+        1 => (1u32..12, 1u32..12, 1u32..12).prop_map(|(nx, ny, nz)| Some(GridSize { nx, ny, nz })),
+    ]
+}
+
 fn scene() -> impl Strategy<Value = SceneSpec> {
-    let flags = (assignment(), shading()).prop_flat_map(|(assignment, shading)| {
+    let flags = (assignment(), shading(), grid()).prop_flat_map(|(assignment, shading, grid)| {
         // Without reflective or transparent materials (before assignment 4) no ray bounces.
         let bounces = if assignment == Assignment::A4 { shading.bounces } else { 0 };
-        (Just(assignment), Just(shading), image_size(max_pixels(bounces)))
+        (Just(assignment), Just(shading), Just(grid), image_size(max_pixels(bounces)))
     });
     (
         flags,
@@ -467,7 +481,7 @@ fn scene() -> impl Strategy<Value = SceneSpec> {
     )
         .prop_map(
             |(
-                (assignment, shading, (width, height)),
+                (assignment, shading, grid, (width, height)),
                 camera,
                 lights,
                 background,
@@ -480,6 +494,7 @@ fn scene() -> impl Strategy<Value = SceneSpec> {
                     height,
                     assignment,
                     shading,
+                    grid,
                     camera,
                     lights,
                     background,
@@ -747,7 +762,8 @@ fn check(gpu: &GpuRenderer, spec: &SceneSpec, totals: &RefCell<Totals>) -> Resul
     let reproduce = || reproduction(spec, &files);
     let (_dir, scene) = load(spec, &files)?;
 
-    let options = RenderOptions { shading: spec.shading, ..RenderOptions::all(spec.width, spec.height) };
+    let options =
+        RenderOptions { shading: spec.shading, grid: spec.grid, ..RenderOptions::all(spec.width, spec.height) };
     totals.borrow_mut().cases += 1;
     let start = Instant::now();
     let ours = match gpu.render(&scene, &options) {
@@ -830,11 +846,12 @@ fn load(spec: &SceneSpec, files: &Files) -> Result<(tempfile::TempDir, Scene), T
 
 fn reproduction(spec: &SceneSpec, files: &Files) -> String {
     let mut text = format!(
-        "---- scene.txt ----\n{}---- end ----\nraycaster compare -input scene.txt -size {} {} -output o.tga -normals n.tga{}\n",
+        "---- scene.txt ----\n{}---- end ----\nraycaster compare -input scene.txt -size {} {} -output o.tga -normals n.tga{}{}\n",
         files.scene,
         spec.width,
         spec.height,
-        flags_text(&spec.shading)
+        flags_text(&spec.shading),
+        spec.grid.map_or(String::new(), |g| format!(" -grid {} {} {}", g.nx, g.ny, g.nz))
     );
     for (name, obj) in &files.objs {
         let _ = write!(text, "---- {name} ----\n{obj}---- end ----\n");
@@ -963,6 +980,7 @@ fn generated_scenes_are_written_as_the_parser_reads_them() {
         height: 16,
         assignment: Assignment::A4,
         shading,
+        grid: None,
         camera: CameraSpec {
             perspective: false,
             center: [0.0, 0.0, 10.0],
