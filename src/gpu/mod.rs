@@ -12,6 +12,7 @@ pub mod binning;
 pub mod flatten;
 pub mod layout;
 pub mod precision;
+mod precision_error;
 mod prepared;
 pub mod shader;
 pub mod support;

@@ -79,8 +79,9 @@ use crate::camera::PrimaryRays;
 use crate::render::RenderOptions;
 use crate::scene::{try_for_each_leaf, Light, Location, Mesh, Object, Scene, Shape};
 use glam::{DMat3, DMat4, DVec3};
-use std::fmt;
-use std::path::{Path, PathBuf};
+use std::path::Path;
+
+pub use super::precision_error::{Limit, PrecisionError, RANGE};
 
 /// The smallest non-zero magnitude the f32 kernel renders faithfully: 2⁻²⁵.
 pub const MIN_MAGNITUDE: f64 = 1.0 / 33_554_432.0;
@@ -92,72 +93,6 @@ pub const MAX_MAGNITUDE: f64 = 268_435_456.0;
 pub const MAX_RESOLUTION_TRIANGLES: f64 = 131_072.0;
 /// The same for a scene of spheres and planes only: 2¹⁹.
 pub const MAX_RESOLUTION_SMOOTH: f64 = 524_288.0;
-
-/// A value the f32 kernel cannot render faithfully, and where it was written.
-#[derive(Clone, Debug, PartialEq)]
-pub struct PrecisionError {
-    /// The file holding the value: the scene, or the OBJ file of a mesh vertex.
-    pub file: PathBuf,
-    /// Where in `file` (see the module's contract); `None` for values the scene model keeps
-    /// no place for (light, background and material colours).
-    pub location: Option<Location>,
-    /// What the value is, e.g. `Sphere radius`.
-    pub what: String,
-    /// Its magnitude, camera-relative and after transforms (NaN or infinite if f64 itself
-    /// overflowed computing it); for [`Limit::Resolution`], the ratio R.
-    pub magnitude: f64,
-    /// The range it left, in words ([`RANGE`], or a texture's, [`super::texture_range`]).
-    pub range: String,
-    /// Which promise the value breaks.
-    pub limit: Limit,
-}
-
-/// The two halves of the contract (see the module's documentation).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Limit {
-    /// A magnitude outside [`MIN_MAGNITUDE`, `MAX_MAGNITUDE`].
-    Range,
-    /// A pixel finer than f32 resolves at the scene's distance: R above
-    /// [`MAX_RESOLUTION_TRIANGLES`] or [`MAX_RESOLUTION_SMOOTH`].
-    Resolution { triangles: bool },
-}
-
-/// The range of every magnitude but textures', in words.
-pub const RANGE: &str = "0 or 2^-25 to 2^28, with the camera at the origin";
-
-impl fmt::Display for PrecisionError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write_place(f, &self.file, self.location)?;
-        match self.limit {
-            Limit::Range => write!(
-                f,
-                ": {}: magnitude {} is outside the range the GPU's f32 kernel renders faithfully ({})",
-                self.what,
-                show(self.magnitude),
-                self.range
-            ),
-            Limit::Resolution { triangles } => write!(
-                f,
-                ": {}: a pixel spans 1/{} of the scene's distance from the camera, finer than the \
-                 GPU's f32 kernel resolves ({})",
-                self.what,
-                show(self.magnitude),
-                if triangles { "1/2^17 with triangles" } else { "1/2^19" }
-            ),
-        }
-    }
-}
-
-impl std::error::Error for PrecisionError {}
-
-/// `FILE`, or `FILE:LINE:COL` where the place is known: how the GPU's refusals begin.
-pub(super) fn write_place(f: &mut fmt::Formatter<'_>, file: &Path, location: Option<Location>) -> fmt::Result {
-    write!(f, "{}", file.display())?;
-    if let Some(Location { line, col }) = location {
-        write!(f, ":{line}:{col}")?;
-    }
-    Ok(())
-}
 
 /// Whether the f32 kernel renders `scene` at `options` faithfully (see the module's
 /// contract); the first offending value in file order otherwise.
@@ -394,19 +329,9 @@ impl Checker<'_> {
     }
 }
 
-/// A magnitude in short scientific notation: `1e39`, `2.684e8`.
-pub(super) fn show(value: f64) -> String {
-    let text = format!("{value:.3e}");
-    match text.split_once('e') {
-        Some((mantissa, exponent)) if mantissa.contains('.') => {
-            format!("{}e{exponent}", mantissa.trim_end_matches('0').trim_end_matches('.'))
-        }
-        _ => text,
-    }
-}
-
 #[cfg(test)]
 mod tests {
+    use super::super::precision_error::show;
     use super::*;
 
     #[test]

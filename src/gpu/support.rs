@@ -33,7 +33,7 @@ pub struct UnsupportedError {
 
 impl fmt::Display for UnsupportedError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        super::precision::write_place(f, &self.file, self.location)?;
+        super::precision_error::write_place(f, &self.file, self.location)?;
         write!(f, ": {}", self.what)
     }
 }

@@ -25,7 +25,7 @@
 //! is `Q · rate ≤` [`MAX_SPREAD`], and refuses otherwise (`auto` falls back to the
 //! reference), located at the texture's block.
 
-use super::precision::{show, PrecisionError};
+use super::precision_error::{show, Limit, PrecisionError};
 use crate::camera::PrimaryRays;
 use crate::render::RenderOptions;
 use crate::scene::{try_for_each_leaf, Bounds, Leaf, Scene, Shape, Texture, TextureKind};
@@ -73,7 +73,7 @@ fn check_material(scene: &Scene, index: u32, worn: Option<Bounds>) -> Result<(),
             location: scene.material_locations.get(index as usize).copied(),
             what: format!("the texture coordinates of material {index}, a {}", texture.kind.keyword()),
             magnitude,
-            limit: super::precision::Limit::Range,
+            limit: Limit::Range,
             range: format!(
                 "up to {} for this texture, whose blend changes by up to {} per unit of texture space: \
                  f32 places its points to 2^-22 of their magnitude",
