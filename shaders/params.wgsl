@@ -9,8 +9,10 @@
 // scene sits in the world.
 //
 // Feature switches are `override` constants, not run-time flags: on lavapipe every branch
-// runs whether taken or not (docs/lavapipe.md), while an override set to false removes its
-// code, so a pipeline holds only what its scene and outputs need (gpu::KernelConfig).
+// runs whether taken or not (docs/lavapipe.md), while the host fixes the overrides and cuts
+// the branches they decide before the driver sees the kernel (gpu::specialise), so a
+// pipeline holds only what its scene and outputs need (gpu::KernelConfig), and compiles
+// only that.
 
 override HAS_SPHERES: bool = true;
 override HAS_ELLIPSOIDS: bool = true;

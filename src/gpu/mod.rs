@@ -15,6 +15,7 @@ pub mod precision;
 mod precision_error;
 mod prepared;
 pub mod shader;
+mod specialise;
 pub mod support;
 pub mod texture_range;
 pub mod tree;
@@ -295,7 +296,6 @@ pub struct GpuRenderer {
     limits: wgpu::Limits,
     bind_group_layout: wgpu::BindGroupLayout,
     pipeline_layout: wgpu::PipelineLayout,
-    module: wgpu::ShaderModule,
     pipelines: Mutex<HashMap<KernelConfig, wgpu::ComputePipeline>>,
     options: GpuOptions,
     timestamps: bool,
@@ -380,10 +380,6 @@ impl GpuRenderer {
         queue: wgpu::Queue,
         options: GpuOptions,
     ) -> GpuRenderer {
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("raycast"),
-            source: wgpu::ShaderSource::Wgsl(shader::source().into()),
-        });
         let entries: Vec<_> = BINDINGS.iter().enumerate().map(|(k, b)| layout_entry(k as u32, b)).collect();
         let bind_group_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("raycast bindings"),
@@ -402,7 +398,6 @@ impl GpuRenderer {
             adapter_info,
             bind_group_layout,
             pipeline_layout,
-            module,
             pipelines: Mutex::new(HashMap::new()),
             options,
         }
@@ -485,13 +480,19 @@ impl GpuRenderer {
         cache
             .entry(config)
             .or_insert_with(|| {
+                let module = specialise::specialise(shader::module(), &config.constants(), config.entry_point());
+                let module = self.device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                    label: Some("raycast"),
+                    source: wgpu::ShaderSource::Naga(std::borrow::Cow::Owned(module)),
+                });
                 self.device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
                     label: Some("raycast"),
                     layout: Some(&self.pipeline_layout),
-                    module: &self.module,
+                    module: &module,
                     entry_point: Some(config.entry_point()),
                     compilation_options: wgpu::PipelineCompilationOptions {
-                        constants: &config.constants(),
+                        // Fixed already, by specialise.
+                        constants: &[],
                         zero_initialize_workgroup_memory: false,
                     },
                     cache: None,
