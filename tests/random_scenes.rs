@@ -15,9 +15,11 @@
 //! reference's images are the same with or without one: tests/grid.rs), so the kernel's
 //! grid meets every primitive, transform and ray kind here. One case in fifty also gets solid textures of assignment 6 (Checkerboard, Noise,
 //! Marble, Wood, under a scale and a turn, blending earlier materials, textures included).
-//! The kernel refuses by design a texture whose coordinates leave its f32 contract (a
-//! textured plane in perspective, say) or that blends a mirror under `-bounces`: such a
-//! case is counted and the count printed, not failed.
+//! The kernel refuses by design a texture on a bounded primitive whose coordinates leave
+//! its f32 contract, or a tree whose textures blend so many mirrors and glasses that its
+//! stack cannot hold it: such a case is counted and the count printed, not failed. (A
+//! plane's far hits, and a checkerboard seen by a reflected or refracted ray, it hands to
+//! the reference pixel by pixel: those cases are compared like any other.)
 //!
 //! Every generated number is in a sane range for the f32 kernel (coordinates within ±10,
 //! camera distances 2 to 30, radii from 0.05, scale factors 0.2 to 5 in magnitude; colours
@@ -824,7 +826,7 @@ fn check(gpu: &GpuRenderer, spec: &SceneSpec, totals: &RefCell<Totals>) -> Resul
 fn refused_texture(error: &GpuError) -> bool {
     match error {
         GpuError::Precision(e) => e.what.starts_with("the texture coordinates"),
-        GpuError::Unsupported(e) => e.what.contains("solid texture"),
+        GpuError::Unsupported(e) => e.what.contains("a solid texture's materials each spawn their own"),
         _ => false,
     }
 }
