@@ -25,6 +25,7 @@ fn eye_triangle_t(tri: EyeTriangle, ray: Ray, tmin: f32) -> f32 {
 }
 
 fn try_eye_triangle(k: u32, ray: Ray, tmin: f32, best: Closest) -> Closest {
+    count(COUNT_TESTS);
     let t = eye_triangle_t(eye_triangles[k], ray, tmin);
     return nearer(best, t, KIND_TRIANGLE, k);
 }

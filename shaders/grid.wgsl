@@ -43,8 +43,10 @@ fn march_start(ray: Ray, t_in: f32) -> March {
 // Enters the current cell: where the ray crosses its boundaries (F32_MAX along an axis it
 // does not move along; recomputed from the cell index at each step rather than
 // incremented as in the paper, so that the error does not grow with the steps taken) and
-// leaves it (at most t_out); returns the cell's (first, count) in prim_refs.
+// leaves it (at most t_out); returns the cell's (first, count) in prim_refs. Counted as a
+// cell traversed (-stats).
 fn march_cell(ray: Ray, m: ptr<function, March>, t_out: f32) -> vec2<u32> {
+    count(COUNT_CELLS);
     let boundary = (*m).cell + select(vec3<i32>(0), vec3<i32>(1), (*m).step > vec3<i32>(0));
     let plane = P.grid_min + vec3<f32>(boundary) * P.grid_cell;
     let still = (*m).step == vec3<i32>(0);

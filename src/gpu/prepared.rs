@@ -5,10 +5,12 @@
 //! it while the caller's thread decodes and writes tile k, so the host's share of the work
 //! (decoding, quantising, writing files) overlaps the device's instead of following it.
 
-use super::flatten::SceneBuffers;
-use super::layout::{Params, PixelLayout, PACKED_MISS, PERLIN_PERMUTATION};
-use super::{GpuError, GpuRenderer, KernelConfig, RenderStats, Timer, BINDINGS, OUTPUT_BINDING, WORKGROUP};
-use crate::render::{row_tiles, Frame, Output, RenderOptions};
+use super::flatten::{GridChoice, SceneBuffers};
+use super::layout::{Params, PixelLayout, PACKED_MISS, PERLIN_PERMUTATION, STATS_SLOTS, STATS_WORDS};
+use super::{
+    GpuError, GpuRenderer, KernelConfig, RenderStats, Timer, BINDINGS, COUNTERS_BINDING, OUTPUT_BINDING, WORKGROUP,
+};
+use crate::render::{row_tiles, Frame, Output, RayStats, RenderOptions};
 use crate::scene::Scene;
 use std::sync::mpsc::sync_channel;
 use wgpu::util::DeviceExt;
@@ -28,6 +30,15 @@ pub struct PreparedScene<'a> {
     /// The scene, kept where the kernel may mark pixels its driver cut short
     /// ([`KernelConfig::loop_canary`]), to render those with the reference.
     fallback: Option<Scene>,
+    /// The kernel's `-stats` counts, shared by every tile (bound to every slot).
+    counters: Counters,
+}
+
+/// The `counters` binding: [`STATS_SLOTS`] slots of [`STATS_WORDS`] words, with a buffer to
+/// read them back, where the render counts (`-stats`); else one word no kernel touches.
+struct Counters {
+    buffer: wgpu::Buffer,
+    readback: Option<wgpu::Buffer>,
 }
 
 /// The buffers one tile in flight uses.
@@ -62,8 +73,13 @@ impl<'a> PreparedScene<'a> {
         let tree = super::support::check(scene, options).map_err(GpuError::Unsupported)?;
         super::precision::check(scene, options).map_err(GpuError::Precision)?;
         let rays = crate::camera::PrimaryRays::for_camera(&scene.camera, options.width, options.height);
-        let secondary_rays = tree.depth > 0 || (options.shading.shadows && !scene.lights.is_empty());
-        let buffers = SceneBuffers::new(scene, &rays, &gpu.options, secondary_rays, options.grid);
+        let secondary_rays =
+            tree.depth > 0 || (options.shading.shadows && !options.visualize_grid && !scene.lights.is_empty());
+        let grid = options.grid.map(|size| match options.visualize_grid {
+            true => GridChoice::Given(super::voxels::voxel_grid(scene, size, rays.center)),
+            false => GridChoice::Walk(size),
+        });
+        let buffers = SceneBuffers::new(scene, &rays, &gpu.options, secondary_rays, grid);
         let flat = buffers.bins.is_none() && buffers.bvh.is_none() && buffers.grid.is_none();
         let primitives =
             buffers.spheres.len() + buffers.ellipsoids.len() + buffers.planes.len() + buffers.triangles.len();
@@ -79,7 +95,8 @@ impl<'a> PreparedScene<'a> {
         let tile_rows = gpu.tile_rows(options.width, &layout)?;
         let tiles = options.height.div_ceil(tile_rows);
         let tile_bytes = options.width as u64 * tile_rows as u64 * layout.words() as u64 * 4;
-        let slots = (0..tiles.min(2)).map(|_| Slot::new(gpu, &inputs, tile_bytes)).collect();
+        let counters = Counters::new(gpu, options.stats);
+        let slots = (0..tiles.min(2)).map(|_| Slot::new(gpu, &inputs, &counters.buffer, tile_bytes)).collect();
         let scene_bytes = inputs.iter().flatten().map(|b| b.size()).sum();
         Ok(PreparedScene {
             gpu,
@@ -104,9 +121,10 @@ impl<'a> PreparedScene<'a> {
                 acceleration: buffers.acceleration(),
                 pixels_cut_short: 0,
                 counted: None,
-                grid_bounds: None,
+                grid_bounds: options.stats.then(|| buffers.grid_world_bounds(rays.center)).flatten(),
             },
             fallback: config.loop_canary.then(|| scene.clone()),
+            counters,
         })
     }
 
@@ -126,6 +144,7 @@ impl<'a> PreparedScene<'a> {
         assert!(first + rows <= self.options.height, "the band lies inside the image");
         let tiles: Vec<(u32, u32)> = row_tiles(rows, self.tile_rows).map(|(offset, n)| (first + offset, n)).collect();
         let mut stats = self.stats;
+        let mut counted = self.counters.zero(self.gpu);
         std::thread::scope(|scope| {
             let (ready_tx, ready_rx) = sync_channel(self.slots.len());
             let (free_tx, free_rx) = sync_channel::<usize>(self.slots.len());
@@ -147,36 +166,46 @@ impl<'a> PreparedScene<'a> {
             for _ in &tiles {
                 let (slot, first_row, rows, kernel_ns) =
                     ready_rx.recv().map_err(|e| GpuError::Readback(e.to_string()))??;
-                stats.pixels_cut_short += self.hand_over(slot, first_row, rows, &mut on_tile)?;
+                let (cut_short, rerendered) = self.hand_over(slot, first_row, rows, &mut on_tile)?;
+                stats.pixels_cut_short += cut_short;
+                if let Some(counted) = &mut counted {
+                    counted.add(&rerendered);
+                }
                 stats.kernel_ns = stats.kernel_ns.zip(kernel_ns).map(|(a, b)| a + b);
                 stats.tiles += 1;
                 // The submitter may already have finished; then nobody needs the slot back.
                 let _ = free_tx.send(slot);
             }
-            Ok(stats)
-        })
+            Ok::<(), E>(())
+        })?;
+        if let Some(mut counted) = counted {
+            counted.add(&self.counters.read(self.gpu)?);
+            stats.counted = Some(counted);
+        }
+        Ok(stats)
     }
 
     /// Shows the caller the mapped tile, its pixels cut short rendered again by the
-    /// reference, then gives the buffer back to the device; returns how many were.
+    /// reference, then gives the buffer back to the device; returns how many were, and
+    /// what the reference counted rendering them (the kernel adds no count of theirs).
     fn hand_over<E: From<GpuError>>(
         &self,
         slot: usize,
         first_row: u32,
         rows: u32,
         on_tile: &mut impl FnMut(&ReadTile) -> Result<(), E>,
-    ) -> Result<u64, E> {
+    ) -> Result<(u64, RayStats), E> {
         let readback = &self.slots[slot].readback;
         let range = readback.slice(..self.tile_bytes(rows));
-        let mut rerendered = 0;
+        let mut rerendered = (0, RayStats::default());
         let result = {
             let view = range.get_mapped_range().map_err(|e| GpuError::Readback(e.to_string()))?;
             let mapped: &[u32] = bytemuck::cast_slice(&view);
             let patched = self.fallback.as_ref().and_then(|scene| self.rerender_cut_short(scene, first_row, mapped));
-            if let Some((_, count)) = &patched {
-                rerendered = *count;
+            if let Some((_, count, counted)) = &patched {
+                rerendered = (*count, *counted);
             }
-            let words = patched.as_ref().map_or(mapped, |(words, _)| &words[..]);
+            let words = patched.as_ref().map_or(mapped, |(words, _, _)| &words[..]);
             on_tile(&ReadTile {
                 first_row,
                 rows,
@@ -191,8 +220,8 @@ impl<'a> PreparedScene<'a> {
     }
 
     /// The tile's words with every pixel the kernel marked as cut short replaced by the
-    /// reference's, and how many those were; `None` when none was.
-    fn rerender_cut_short(&self, scene: &Scene, first_row: u32, words: &[u32]) -> Option<(Vec<u32>, u64)> {
+    /// reference's, how many those were and what the reference counted; `None` when none was.
+    fn rerender_cut_short(&self, scene: &Scene, first_row: u32, words: &[u32]) -> Option<(Vec<u32>, u64, RayStats)> {
         let stride = self.layout.words() as usize;
         let width = self.options.width as usize;
         let cut: Vec<usize> =
@@ -202,12 +231,13 @@ impl<'a> PreparedScene<'a> {
         }
         let pixels: Vec<(u32, u32)> =
             cut.iter().map(|&k| ((k % width) as u32, first_row + (k / width) as u32)).collect();
-        let reference = crate::cpu::Reference::new(scene, &self.options).pixels(&pixels);
+        let reference = crate::cpu::Reference::new(scene, &self.options);
+        let rendered = reference.pixels(&pixels);
         let mut out = words.to_vec();
         for (n, &k) in cut.iter().enumerate() {
-            self.layout.encode(&reference.pixel(n), &mut out[k * stride..(k + 1) * stride]);
+            self.layout.encode(&rendered.pixel(n), &mut out[k * stride..(k + 1) * stride]);
         }
-        Some((out, cut.len() as u64))
+        Some((out, cut.len() as u64, reference.stats()))
     }
 
     fn tile_bytes(&self, rows: u32) -> u64 {
@@ -251,7 +281,12 @@ impl<'a> PreparedScene<'a> {
 }
 
 impl Slot {
-    fn new(gpu: &GpuRenderer, inputs: &[Option<wgpu::Buffer>; BINDINGS.len()], tile_bytes: u64) -> Slot {
+    fn new(
+        gpu: &GpuRenderer,
+        inputs: &[Option<wgpu::Buffer>; BINDINGS.len()],
+        counters: &wgpu::Buffer,
+        tile_bytes: u64,
+    ) -> Slot {
         let buffer = |label, size, usage| {
             gpu.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
@@ -269,6 +304,7 @@ impl Slot {
                 let resource = match k {
                     0 => &params,
                     OUTPUT_BINDING => &output,
+                    COUNTERS_BINDING => counters,
                     _ => inputs[k].as_ref().expect("every input binding is uploaded"),
                 };
                 wgpu::BindGroupEntry { binding: k as u32, resource: resource.as_entire_binding() }
@@ -281,6 +317,54 @@ impl Slot {
         });
         let timer = gpu.timestamps.then(|| Timer::new(&gpu.device));
         Slot { params, output, readback, bind_group, timer }
+    }
+}
+
+impl Counters {
+    const WORDS: u64 = STATS_SLOTS as u64 * STATS_WORDS as u64;
+
+    fn new(gpu: &GpuRenderer, stats: bool) -> Counters {
+        use wgpu::BufferUsages as U;
+        let size = if stats { Self::WORDS * 4 } else { 4 };
+        let buffer = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("counters"),
+            size,
+            usage: U::STORAGE | U::COPY_SRC | U::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let readback = stats.then(|| {
+            gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("counters readback"),
+                size,
+                usage: U::MAP_READ | U::COPY_DST,
+                mapped_at_creation: false,
+            })
+        });
+        Counters { buffer, readback }
+    }
+
+    /// Zeroes the counts before a render that counts (ordered before its tiles, which are
+    /// submitted after); `None` for a render that does not.
+    fn zero(&self, gpu: &GpuRenderer) -> Option<RayStats> {
+        self.readback.as_ref()?;
+        gpu.queue.write_buffer(&self.buffer, 0, &[0; Self::WORDS as usize * 4]);
+        Some(RayStats::default())
+    }
+
+    /// What the kernel counted since [`Counters::zero`], once its tiles are done.
+    fn read(&self, gpu: &GpuRenderer) -> Result<RayStats, GpuError> {
+        let readback = self.readback.as_ref().expect("read only where counted");
+        let mut encoder =
+            gpu.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("counters") });
+        encoder.copy_buffer_to_buffer(&self.buffer, 0, readback, 0, Self::WORDS * 4);
+        let submission = gpu.queue.submit([encoder.finish()]);
+        map_and_wait(&gpu.device, &readback.slice(..), submission)?;
+        let counted = {
+            let view = readback.slice(..).get_mapped_range().map_err(|e| GpuError::Readback(e.to_string()))?;
+            super::layout::sum_counters(bytemuck::cast_slice(&view))
+        };
+        readback.unmap();
+        Ok(counted)
     }
 }
 
@@ -312,6 +396,7 @@ fn upload_inputs(
         Some(non_empty(bins.map_or(&[][..], |b| &b.items))),
         Some(non_empty(&buffers.textures)),
         Some(non_empty(if buffers.textures.is_empty() { &[][..] } else { &PERLIN_PERMUTATION[..] })),
+        None,
     ];
     let mut out: [Option<wgpu::Buffer>; BINDINGS.len()] = Default::default();
     for (k, bytes) in contents.iter().enumerate() {

@@ -47,7 +47,8 @@ pub const CHECKER_RATE: f64 = 32.0;
 /// (see the module's contract); the first texture that is not, in file order of the
 /// primitives wearing it, otherwise.
 pub fn check(scene: &Scene, options: &RenderOptions) -> Result<(), PrecisionError> {
-    if !scene.has_textures() {
+    // The voxel picture (-visualize_grid) shades cells, never a material.
+    if !scene.has_textures() || options.visualize_grid {
         return Ok(());
     }
     let rays = PrimaryRays::for_camera(&scene.camera, options.width, options.height);
