@@ -484,6 +484,20 @@ fn the_gpu_counts_and_draws_voxels_from_the_command_line() {
     let read = |name: &str| raycaster::image_io::read_image(&dir.path().join(name)).unwrap();
     let diff = raycaster::metrics::image_diff(&read("g.tga"), &read("c.tga"));
     assert!(diff.off_by_more_than_one * 1000 <= diff.pixels, "{diff:?}");
+    // In a batch, each line's block follows its images, on stdout, with the line's counts.
+    let lines = format!(
+        "-input {0} -size 300 200 -output b1.tga -grid 3 3 3 -stats\n-input {0} -size 30 20 -output b2.tga -stats\n",
+        path_str(&scene)
+    );
+    std::fs::write(dir.path().join("lines.txt"), lines).unwrap();
+    let batch = raycaster_in(dir.path(), &["batch", "lines.txt", "--backend", "gpu"]);
+    assert!(batch.status.success(), "{}", stderr(&batch));
+    let stdout = String::from_utf8(batch.stdout).unwrap();
+    let blocks: Vec<&str> = stdout.split("RAY TRACING STATISTICS").skip(1).collect();
+    assert_eq!(blocks.len(), 2, "{stdout}");
+    assert_eq!(counts(blocks[0]), counts(&gpu), "{stdout}");
+    assert_eq!(counts(blocks[1]), [600, 0, 3 * 600, 0], "{stdout}");
+    assert!(dir.path().join("b1.tga").exists() && dir.path().join("b2.tga").exists());
 }
 
 /// Every line of the course's A5 and A6 `commands.txt`, as written (the default backend),
