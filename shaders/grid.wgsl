@@ -6,8 +6,13 @@
 
 // The ray's part inside the grid's box within (tmin, tmax), by the slab test (Kay and
 // Kajiya 1986): (t_in, t_out), with t_in > t_out where it misses. A direction component of
-// zero leaves its slab unbounded when the origin lies between the planes.
+// zero leaves its slab unbounded when the origin lies between the planes. A grid over
+// nothing (planes alone) has cells of extent 0 and no box: every ray misses it, as the
+// reference's march enters no cell.
 fn grid_span(ray: Ray, tmin: f32, tmax: f32) -> vec2<f32> {
+    if (P.grid_cell.x == 0.0) {
+        return vec2<f32>(1.0, 0.0);
+    }
     let lo = P.grid_min;
     let hi = P.grid_min + P.grid_cell * vec3<f32>(f32(P.grid_nx), f32(P.grid_ny), f32(P.grid_nz));
     let parallel = ray.direction == vec3<f32>(0.0);

@@ -498,6 +498,27 @@ fn the_gpu_counts_and_draws_voxels_from_the_command_line() {
     assert_eq!(counts(blocks[0]), counts(&gpu), "{stdout}");
     assert_eq!(counts(blocks[1]), [600, 0, 3 * 600, 0], "{stdout}");
     assert!(dir.path().join("b1.tga").exists() && dir.path().join("b2.tga").exists());
+
+    // A grid over nothing (a plane alone): no ray enters a cell, on either backend.
+    let plane = dir.path().join("plane.txt");
+    std::fs::write(
+        &plane,
+        "PerspectiveCamera { center 0 0 10 direction 0 0 -1 up 0 1 0 angle 30 }\n\
+         Materials { numMaterials 1 Material { diffuseColor 1 1 1 } }\n\
+         Group { numObjects 1 MaterialIndex 0 Plane { normal 0 1 0 offset -1 } }\n",
+    )
+    .unwrap();
+    for extra in [&[][..], &["-visualize_grid"]] {
+        let base =
+            ["-input", path_str(&plane), "-size", "20", "20", "-output", "p.tga", "-grid", "2", "2", "2", "-stats"];
+        let stdout = |backend: &str| {
+            let result = raycaster_in(dir.path(), &[&base[..], extra, &["--backend", backend]].concat());
+            assert!(result.status.success(), "{}", stderr(&result));
+            counts(&String::from_utf8(result.stdout).unwrap())
+        };
+        assert_eq!(stdout("gpu"), stdout("cpu"), "{extra:?}");
+        assert_eq!(stdout("gpu")[3], 0, "{extra:?}");
+    }
 }
 
 /// Every line of the course's A5 and A6 `commands.txt`, as written (the default backend),
