@@ -10,6 +10,7 @@ use common::bin::{path_str, raycaster, raycaster_in, stderr};
 use glam::DVec3;
 use raycaster::camera::{PrimaryRays, Ray};
 use raycaster::cpu::ReferenceScene;
+use raycaster::gpu::Acceleration;
 use raycaster::grid::{Grid, GridSize};
 use raycaster::render::{RenderOptions, Shading};
 use raycaster::scene::{load_scene, parse_scene, Bounds, Scene};
@@ -682,4 +683,40 @@ fn gpu_stats_agree_with_the_reference() {
         assert!(ours.intersections.abs_diff(predicted.0) <= differ * crossed * longest, "{}", report.join("\n"));
     }
     println!("{}", report.join("\n"));
+}
+
+/// Without a grid the kernel counts its own work (docs/SPEC.md §7): one ray per pixel and no
+/// cell whichever way it finds candidates; in flat loops every triangle for every pixel;
+/// through bins or the hierarchy at least one test per pixel that hits something (its hit
+/// was tested) and at most every triangle for every ray of a packet (bins trace whole
+/// packets of 4 rows).
+#[test]
+fn gpu_stats_without_a_grid_count_the_kernels_own_tests() {
+    let Some(corpus) = common::corpus() else { return };
+    if common::gpu().is_none() {
+        return;
+    }
+    let scene = load_scene(&corpus.join("a2/scene2_10_bunny_1k.txt")).unwrap();
+    let triangles = scene.primitive_counts().triangles as u64;
+    let (width, height) = (64u32, 50u32);
+    let options = RenderOptions { stats: true, ..RenderOptions::all(width, height) };
+    let pixels = u64::from(width * height);
+    let packet_rows = u64::from(height.div_ceil(4) * 4);
+    for acceleration in [Acceleration::Flat, Acceleration::Bins, Acceleration::Hierarchy] {
+        let gpu = common::gpu_with(acceleration).unwrap();
+        let (frame, stats) = common::render_gpu_tiles(&gpu, &scene, &options);
+        assert_eq!(stats.acceleration, acceleration);
+        let counted = stats.counted.expect("the kernel counted");
+        let hits = frame.hit.iter().filter(|&&h| h).count() as u64;
+        let what = format!("{acceleration:?}: {counted:?}, {hits} pixels hit");
+        assert_eq!((counted.non_shadow_rays, counted.shadow_rays, counted.cells_traversed), (pixels, 0, 0), "{what}");
+        match acceleration {
+            Acceleration::Flat => assert_eq!(counted.intersections, pixels * triangles, "{what}"),
+            _ => {
+                assert!(hits > 0 && counted.intersections >= hits, "{what}");
+                assert!(counted.intersections <= u64::from(width) * packet_rows * triangles, "{what}");
+            }
+        }
+        println!("{what}");
+    }
 }
