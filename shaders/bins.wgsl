@@ -25,6 +25,7 @@ fn eye_triangle_t(tri: EyeTriangle, ray: Ray, tmin: f32) -> f32 {
 }
 
 fn try_eye_triangle(k: u32, ray: Ray, tmin: f32, best: Closest) -> Closest {
+    count(COUNT_TESTS);
     let t = eye_triangle_t(eye_triangles[k], ray, tmin);
     return nearer(best, t, KIND_TRIANGLE, k);
 }
@@ -68,6 +69,7 @@ fn walk_bin_packet(bin: u32, tmin: f32) {
         if (!HAS_SPHERES && !HAS_ELLIPSOIDS && TRIANGLE_TEST == TRIANGLE_WATERTIGHT) {
             let tri = eye_triangles[reference];
             for (var r = 0u; r < PACKET; r++) {
+                count(COUNT_TESTS);
                 packet_hits[r] = nearer(packet_hits[r], eye_triangle_t(tri, packet_rays[r], tmin), KIND_TRIANGLE, reference);
             }
             continue;

@@ -22,17 +22,20 @@ fn nearer(best: Closest, t: f32, kind: u32, index: u32) -> Closest {
 }
 
 fn try_sphere(k: u32, ray: Ray, tmin: f32, best: Closest) -> Closest {
+    count(COUNT_TESTS);
     let s = spheres[k];
     let t = sphere_t(ray.origin - s.center, ray.direction, s.radius, tmin);
     return nearer(best, t, KIND_SPHERE, k);
 }
 
 fn try_ellipsoid(k: u32, ray: Ray, tmin: f32, best: Closest) -> Closest {
+    count(COUNT_TESTS);
     let t = ellipsoid_t(ellipsoids[k], ray, tmin);
     return nearer(best, t, KIND_ELLIPSOID, k);
 }
 
 fn try_triangle(k: u32, ray: Ray, shear: Shear, tmin: f32, best: Closest) -> Closest {
+    count(COUNT_TESTS);
     let t = triangle_t(triangles[k], ray, shear, tmin);
     return nearer(best, t, KIND_TRIANGLE, k);
 }
@@ -67,6 +70,7 @@ fn closest_plane(ray: Ray, tmin: f32) -> Closest {
     var best = no_hit();
     if (HAS_PLANES) {
         for (var k = 0u; k < P.num_planes; k++) {
+            count(COUNT_TESTS);
             best = nearer(best, plane_t(planes[k], ray, tmin), KIND_PLANE, k);
         }
     }
@@ -76,6 +80,7 @@ fn closest_plane(ray: Ray, tmin: f32) -> Closest {
 // The closest hit above tmin without bins: through the hierarchy, or flat loops over each
 // kind.
 fn closest_hit(ray: Ray, tmin: f32) -> Closest {
+    count(COUNT_RAYS);
     var best = closest_plane(ray, tmin);
     // Only the watertight test reads the shear; otherwise the compiler drops it.
     let shear = shear_for(ray.direction);

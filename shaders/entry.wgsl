@@ -69,8 +69,24 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let ray = ray_of_row(i, P.first_row + row);
-    let shaded = shade_pixel(ray, closest_hit(ray, t_min()));
-    write_row(i, i32(row), shaded, LOOP_CANARY && loops_were_cut());
+    var shaded: Shaded;
+    if (VOXELS) {
+        shaded = voxel_pixel(ray);
+    } else {
+        shaded = shade_pixel(ray, closest_hit(ray, t_min()));
+    }
+    let cut = LOOP_CANARY && loops_were_cut();
+    write_row(i, i32(row), shaded, cut);
+    // A pixel cut short is rendered again, and counted, by the reference.
+    if (!cut) {
+        flush_counts(stats_slot(id));
+    }
+}
+
+// Which slot of `counters` an invocation adds into: neighbours in a workgroup take
+// different ones.
+fn stats_slot(id: vec3<u32>) -> u32 {
+    return id.x + WORKGROUP * id.y;
 }
 
 // Image rows base + PACKET·y … + PACKET − 1, where base is the tile's first row rounded
@@ -88,6 +104,11 @@ fn main_bins(@builtin(global_invocation_id) id: vec3<u32>) {
     let tmin = t_min();
     for (var r = 0u; r < PACKET; r++) {
         packet_rays[r] = ray_of_row(i, base + r);
+        // A row outside the tile is traced with its packet but not a pixel of it: its ray
+        // is not counted (its tests are: the kernel ran them).
+        if (u32(first + i32(r)) < P.tile_rows) {
+            count(COUNT_RAYS);
+        }
         packet_hits[r] = closest_plane(packet_rays[r], tmin);
     }
     walk_bin_packet((base / BIN_SIDE) * P.bin_columns + i / BIN_SIDE, tmin);
@@ -101,5 +122,8 @@ fn main_bins(@builtin(global_invocation_id) id: vec3<u32>) {
     let cut = LOOP_CANARY && loops_were_cut();
     for (var r = 0u; r < PACKET; r++) {
         write_row(i, first + i32(r), shaded[r], cut);
+    }
+    if (!cut) {
+        flush_counts(stats_slot(id));
     }
 }

@@ -6,8 +6,13 @@
 
 // The ray's part inside the grid's box within (tmin, tmax), by the slab test (Kay and
 // Kajiya 1986): (t_in, t_out), with t_in > t_out where it misses. A direction component of
-// zero leaves its slab unbounded when the origin lies between the planes.
+// zero leaves its slab unbounded when the origin lies between the planes. A grid over
+// nothing (planes alone) has cells of extent 0 and no box: every ray misses it, as the
+// reference's march enters no cell.
 fn grid_span(ray: Ray, tmin: f32, tmax: f32) -> vec2<f32> {
+    if (P.grid_cell.x == 0.0) {
+        return vec2<f32>(1.0, 0.0);
+    }
     let lo = P.grid_min;
     let hi = P.grid_min + P.grid_cell * vec3<f32>(f32(P.grid_nx), f32(P.grid_ny), f32(P.grid_nz));
     let parallel = ray.direction == vec3<f32>(0.0);
@@ -43,8 +48,10 @@ fn march_start(ray: Ray, t_in: f32) -> March {
 // Enters the current cell: where the ray crosses its boundaries (F32_MAX along an axis it
 // does not move along; recomputed from the cell index at each step rather than
 // incremented as in the paper, so that the error does not grow with the steps taken) and
-// leaves it (at most t_out); returns the cell's (first, count) in prim_refs.
+// leaves it (at most t_out); returns the cell's (first, count) in prim_refs. Counted as a
+// cell traversed (-stats).
 fn march_cell(ray: Ray, m: ptr<function, March>, t_out: f32) -> vec2<u32> {
+    count(COUNT_CELLS);
     let boundary = (*m).cell + select(vec3<i32>(0), vec3<i32>(1), (*m).step > vec3<i32>(0));
     let plane = P.grid_min + vec3<f32>(boundary) * P.grid_cell;
     let still = (*m).step == vec3<i32>(0);

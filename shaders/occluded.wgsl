@@ -6,9 +6,11 @@
 // closest hit so far. Without the hierarchy (flat loops, or bins, which hold primary rays
 // only) every primitive is a candidate.
 fn occluded(ray: Ray, tmin: f32, tmax: f32) -> bool {
+    count(COUNT_SHADOW_RAYS);
     let bound = Closest(tmax, KIND_TRIANGLE, 0u);
     if (HAS_PLANES) {
         for (var k = 0u; k < P.num_planes; k++) {
+            count(COUNT_TESTS);
             if (plane_t(planes[k], ray, tmin) < tmax) {
                 return true;
             }

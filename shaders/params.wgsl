@@ -68,6 +68,11 @@ override USE_BINS: bool = false;
 override USE_GRID: bool = false;
 // Some material is a solid texture (shaders/texture.wgsl); without, no texture code.
 override TEXTURES: bool = false;
+// The course's -stats (shaders/stats.wgsl): count rays, tests and cells into `counters`.
+override STATS: bool = false;
+// The course's -visualize_grid (shaders/voxels.wgsl): primary rays see the grid's occupied
+// cells as boxes instead of the scene; bin_ranges holds each cell's (0, items).
+override VOXELS: bool = false;
 
 const F32_MAX: f32 = 3.40282347e38;
 // The "no hit" distance: never less than any closest-so-far, and what a Closest holds
@@ -243,3 +248,5 @@ var<private> P: Params;
 @group(0) @binding(13) var<storage, read> textures: array<Texture>;
 // Perlin's permutation (256 entries) where TEXTURES (a single zero otherwise).
 @group(0) @binding(14) var<storage, read> permutation: array<u32>;
+// The -stats counts (shaders/stats.wgsl), where STATS; never touched otherwise.
+@group(0) @binding(15) var<storage, read_write> counters: array<atomic<u32>>;

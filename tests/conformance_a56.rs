@@ -3,9 +3,9 @@
 //! inside copies of the folders, on the f64 reference and on the GPU. The GPU's image is held
 //! to the 0.1 % contract against the reference's wherever the kernel renders the scene; where
 //! it refuses (exit 1, one located line on stderr, no image), its reason must be one the
-//! kernel states (src/gpu/support.rs, src/gpu/texture_range.rs), and a line refused only for
-//! `-stats` runs again without it, since counting changes no pixel: the scene is still
-//! compared. No textured line is refused. The reference's images are compared with the course's where `expected/` holds
+//! kernel states (src/gpu/support.rs, src/gpu/texture_range.rs); no textured line is
+//! refused. The `-visualize_grid` lines are compared like the others: both backends draw the
+//! course's occupancy (docs/SPEC.md §7). The reference's images are compared with the course's where `expected/` holds
 //! one: `output6_15` within the contract; `output6_16`, `output5_12` and `output6_18b` only
 //! printed, since the course's wood, and its grid visualisation's colours, are its own.
 //!
@@ -21,10 +21,6 @@ use std::process::Command;
 /// Why the GPU kernel refuses a line, as its message says it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum Refusal {
-    /// `-visualize_grid`: it draws no cells yet, so no GPU image exists to compare.
-    VisualizeGrid,
-    /// `-stats`: it counts nothing yet; the line runs again without the flag.
-    Stats,
     /// Texture coordinates beyond the f32 kernel's faithful range (e.g. a textured plane,
     /// unbounded, seen in perspective).
     TextureRange,
@@ -33,8 +29,6 @@ enum Refusal {
 /// The known reason in one refusal's stderr, from the kernel's own wording.
 fn refusal_kind(message: &str) -> Option<Refusal> {
     [
-        ("-visualize_grid: the GPU kernel does not draw the grid's cells yet", Refusal::VisualizeGrid),
-        ("-stats: the GPU kernel does not count rays, tests or cells yet", Refusal::Stats),
         ("is outside the range the GPU's f32 kernel renders faithfully", Refusal::TextureRange),
     ]
     .into_iter()
@@ -68,8 +62,8 @@ fn off(ours: &Path, other: &Path) -> (usize, usize, bool) {
     (d.off_by_more_than_one, d.pixels, d.off_by_more_than_one <= limit)
 }
 
-/// What one folder's lines gave: the failures, the table's rows, and how many lines were
-/// refused for `-visualize_grid` (no GPU image to compare).
+/// What one folder's lines gave: the failures, the table's rows, and how many GPU images
+/// were compared, of them how many `-visualize_grid` pictures.
 #[derive(Default)]
 struct Outcome {
     failures: Vec<String>,
@@ -120,35 +114,15 @@ fn folder_on_both_backends(corpus: &Path, folder: &str, outcome: &mut Outcome) {
                     outcome.rows.push(format!("{stem:<12} cpu ok, gpu FAILED"));
                     continue;
                 }
-                match kind.unwrap() {
-                    Refusal::Stats => {
-                        let without: Vec<String> = command.iter().filter(|a| *a != "-stats").cloned().collect();
-                        match run(gpu.path(), &without, "gpu") {
-                            Ok(()) => ("refused -stats; rendered without it".to_string(), true),
-                            Err(e) => {
-                                let again = refusal_kind(&e.join("\n"));
-                                if again.is_none() || again == Some(Refusal::Stats) {
-                                    outcome.failures.push(format!("{stem} without -stats: the GPU failed: {e:?}"));
-                                }
-                                (format!("refused -stats, then {again:?} without it"), false)
-                            }
-                        }
-                    }
-                    Refusal::VisualizeGrid => {
-                        outcome.visualize_grid += 1;
-                        ("refused -visualize_grid (no GPU image)".to_string(), false)
-                    }
-                    other => {
-                        outcome.texture_refusals.push(stem.clone());
-                        (format!("refused {other:?}: {}", lines[0]), false)
-                    }
-                }
+                outcome.texture_refusals.push(stem.clone());
+                (format!("refused {:?}: {}", kind.unwrap(), lines[0]), false)
             }
         };
         let mut row = format!("{stem:<12} cpu ok, gpu {gpu_text}");
         if rendered {
             let (n, p, within) = off(&ours, &reference);
             outcome.compared += 1;
+            outcome.visualize_grid += usize::from(command.iter().any(|a| a == "-visualize_grid"));
             row += &format!("  GPU vs reference: {n}/{p} off");
             if !within {
                 outcome.failures.push(format!("{stem}: GPU against the reference: {n} of {p} pixels off"));
@@ -169,8 +143,8 @@ fn course_images_a5_a6_on_both_backends() {
     folder_on_both_backends(&corpus, "a6", &mut outcome);
     println!("{}", outcome.rows.join("\n"));
     println!(
-        "{} lines with an image; {} GPU images compared with the reference; {} -visualize_grid \
-         lines (no GPU image); texture refusals: {:?}; {:.1} s",
+        "{} lines with an image; {} GPU images compared with the reference, {} of them \
+         -visualize_grid pictures; texture refusals: {:?}; {:.1} s",
         outcome.rows.len(),
         outcome.compared,
         outcome.visualize_grid,
@@ -179,6 +153,10 @@ fn course_images_a5_a6_on_both_backends() {
     );
     // 15 lines of a5 and all 44 of a6 write an image.
     assert_eq!(outcome.rows.len(), 59, "{:?}", outcome.rows);
+    if common::gpu().is_some() {
+        // 15 lines of a5 and 11 of a6 draw the grid, each compared.
+        assert_eq!(outcome.visualize_grid, 26, "{:?}", outcome.rows);
+    }
     assert!(outcome.failures.is_empty(), "{:#?}", outcome.failures);
     // Every textured line renders on the GPU: a plane's far hits, and a checkerboard seen
     // through reflection or refraction, are pixels the kernel hands to the reference.

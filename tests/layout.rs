@@ -256,6 +256,8 @@ fn override_constants_match_the_host() {
         use_bins: false,
         use_grid: false,
         textures: true,
+        stats: true,
+        voxels: true,
     };
     let mut host: Vec<String> = config.constants().iter().map(|(name, _)| name.to_string()).collect();
     host.sort();
@@ -350,4 +352,21 @@ fn any_hit_query_is_declared() {
     assert_eq!(arguments, ["ray", "tmin", "tmax"]);
     let result = f.result.as_ref().expect("occluded returns a value");
     assert_eq!(m.types[result.ty].inner, naga::TypeInner::Scalar(naga::Scalar::BOOL));
+}
+
+/// The host reads each `-stats` count as a high word times 2³² plus a low word, summed
+/// over the slots (shaders/stats.wgsl carries into the high word when the low one wraps):
+/// 3·2³² + 5 in one slot and 2³² − 1 in another make 4·2³² + 4.
+#[test]
+fn stats_counters_sum_high_and_low_words_over_the_slots() {
+    use raycaster::gpu::layout::{sum_counters, STATS_SLOTS, STATS_WORDS};
+    let mut words = vec![0u32; (STATS_SLOTS * STATS_WORDS) as usize];
+    words[4] = 5; // slot 0, tests: low
+    words[5] = 3; // slot 0, tests: high
+    words[STATS_WORDS as usize + 4] = u32::MAX; // slot 1, tests: low
+    words[(STATS_SLOTS as usize - 1) * STATS_WORDS as usize + 6] = 7; // last slot, cells
+    let counted = sum_counters(&words);
+    assert_eq!(counted.intersections, (4 << 32) + 4);
+    assert_eq!(counted.cells_traversed, 7);
+    assert_eq!((counted.non_shadow_rays, counted.shadow_rays), (0, 0));
 }

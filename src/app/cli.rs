@@ -151,6 +151,12 @@ fn render_or_compare(verb: Verb, given: Given) -> Result<Command, UsageError> {
     if args.visualize_grid && args.grid.is_none() {
         return Err(UsageError("-visualize_grid draws the grid's cells: give -grid NX NY NZ too".into()));
     }
+    if let Some(t) = args.tile.filter(|_| args.stats) {
+        return Err(UsageError(format!(
+            "-stats with --tile {}/{}: a band counts only its own rows; render the image in one piece to count it",
+            t.index, t.count
+        )));
+    }
     if verb == Verb::Render {
         // `-gui` alone asks for the course's window only: nothing to render, not an error.
         if named.is_empty() && !given.gui {
@@ -512,6 +518,9 @@ mod tests {
             other => panic!("{other:?}"),
         }
         assert_eq!(render("-input s -size 4 9 -output o.exr --tile 1/3").tile, Some(Split { index: 1, count: 3 }));
+        // A band's -stats would count its own rows under the whole image's size.
+        let stats = parse("-input s -size 8 8 -output o.tga --tile 0/2 -stats").unwrap_err().0;
+        assert!(stats.starts_with("-stats with --tile 0/2: a band counts only its own rows"), "{stats}");
     }
 
     #[test]

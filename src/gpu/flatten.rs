@@ -87,14 +87,15 @@ impl SceneBuffers {
         rays: &PrimaryRays,
         options: &GpuOptions,
         secondary_rays: bool,
-        grid: Option<GridSize>,
+        grid: Option<GridChoice>,
     ) -> SceneBuffers {
         let mut buffers = SceneBuffers { orthographic: rays.orthographic, ..Default::default() };
         let to_camera = DMat4::from_translation(-rays.center);
         buffers.flatten(&scene.root, &to_camera);
         match grid {
             // An explicit grid means the grid (docs/SPEC.md §7).
-            Some(size) => buffers.grid = Some(GpuGrid::build(&buffers, size)),
+            Some(GridChoice::Walk(size)) => buffers.grid = Some(GpuGrid::build(&buffers, size)),
+            Some(GridChoice::Given(grid)) => buffers.grid = Some(grid),
             None => buffers.choose_acceleration(rays, options, secondary_rays),
         }
         if let Some(bvh) = buffers.bvh.as_ref().filter(|b| b.prim_refs.is_empty()) {
@@ -128,6 +129,13 @@ impl SceneBuffers {
             (buffers.params.grid_min, buffers.params.grid_cell) = (grid.min, grid.cell);
         }
         buffers
+    }
+
+    /// The box the `-grid`'s cells divide, in world space (the camera's centre added back),
+    /// where there is a grid with something in it: what `-stats` prints.
+    pub fn grid_world_bounds(&self, camera_center: DVec3) -> Option<Bounds> {
+        let bounds = self.grid.as_ref()?.bounds;
+        (!bounds.is_empty()).then(|| Bounds { min: bounds.min + camera_center, max: bounds.max + camera_center })
     }
 
     /// What the kernel walks to find candidates.
@@ -267,11 +275,22 @@ impl SceneBuffers {
 
 /// The f32 box around `center ± half`, padded by a relative 1e-6 so that rounding to f32
 /// can never leave part of the curved surface outside it.
+/// Which grid a render with `-grid` gets.
+pub enum GridChoice {
+    /// The kernel's own over its f32 primitives, for finding hits ([`GpuGrid`]).
+    Walk(GridSize),
+    /// One the caller built (the `-visualize_grid` occupancy of `gpu::voxels`).
+    Given(GpuGrid),
+}
+
 /// The `-grid` as the kernel walks it (shaders/grid.wgsl): cell `x + nx·(y + ny·z)` lists
 /// `refs[first .. first + count]` for its `ranges` entry `[first, count]`.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug)]
 pub struct GpuGrid {
     pub size: [u32; 3],
+    /// The box the cells divide, camera-relative, in f64 ([`Bounds::EMPTY`] when nothing
+    /// finite was there).
+    pub bounds: Bounds,
     pub min: [f32; 3],
     pub cell: [f32; 3],
     pub ranges: Vec<[u32; 2]>,
@@ -286,7 +305,10 @@ pub struct GpuGrid {
 const GRID_MARGIN_F32: f64 = 1e-5;
 
 impl GpuGrid {
-    /// The grid of `size` cells over the buffers' finite primitives, each placed by its box.
+    /// The grid of `size` cells over the buffers' finite primitives, each placed by its box,
+    /// but a sphere by the handout's rule as the reference places an untransformed one
+    /// (docs/SPEC.md §7), so that both test the same items where both run the 3D-DDA
+    /// (`-stats` counts them): each widened by the margin.
     fn build(buffers: &SceneBuffers, size: GridSize) -> GpuGrid {
         let start = Instant::now();
         let mut boxes: Vec<(u32, Aabb)> = Vec::new();
@@ -301,12 +323,19 @@ impl GpuGrid {
         }
         let to_bounds = |b: &Aabb| Bounds { min: b.min.as_dvec3(), max: b.max.as_dvec3() };
         let all = boxes.iter().fold(Bounds::EMPTY, |all, (_, b)| all.union(&to_bounds(b)));
-        let margin = DVec3::splat(GRID_MARGIN_F32 * reach_of(&all));
+        let margin = GRID_MARGIN_F32 * reach_of(&all);
         let footprints: Vec<Footprint> = boxes
             .iter()
-            .map(|(_, b)| {
-                let b = to_bounds(b);
-                Footprint::Box(Bounds { min: b.min - margin, max: b.max + margin })
+            .map(|&(reference, b)| match PrimitiveKind::of_reference(reference) {
+                (PrimitiveKind::Sphere, k) => {
+                    let sphere = &buffers.spheres[k];
+                    let center = Vec3::from(sphere.center).as_dvec3();
+                    Footprint::Sphere { center, radius: f64::from(sphere.radius) + margin }
+                }
+                _ => {
+                    let b = to_bounds(&b);
+                    Footprint::Box(Bounds { min: b.min - margin, max: b.max + margin })
+                }
             })
             .collect();
         let grid = Grid::new(all, size, &footprints);
@@ -325,6 +354,7 @@ impl GpuGrid {
         let min = if all.is_empty() { DVec3::ZERO } else { grid.bounds.min };
         GpuGrid {
             size: [size.nx, size.ny, size.nz],
+            bounds: grid.bounds,
             min: f32x3(min),
             cell: f32x3(grid.cell_extent()),
             ranges,

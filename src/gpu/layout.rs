@@ -399,9 +399,36 @@ impl PrimitiveKind {
         }
     }
 
+    /// The kind and index a reference names ([`PrimitiveKind::reference`]'s inverse).
+    pub fn of_reference(reference: u32) -> (PrimitiveKind, usize) {
+        let kind = Self::ALL[(reference >> REF_KIND_SHIFT) as usize];
+        (kind, (reference & ((1 << REF_KIND_SHIFT) - 1)) as usize)
+    }
+
     /// The reference to primitive `index` of this kind.
     pub fn reference(self, index: usize) -> u32 {
         debug_assert!(index < 1 << REF_KIND_SHIFT);
         (self as u32) << REF_KIND_SHIFT | index as u32
     }
+}
+
+/// Slots of the kernel's `-stats` counters (shaders/stats.wgsl): neighbouring invocations
+/// add into different slots, so that few contend on one word.
+pub const STATS_SLOTS: u32 = 64;
+
+/// Words of one slot: a low and a high word for each of the four counts, in
+/// [`crate::render::RayStats`]' order (non-shadow rays, shadow rays, tests, cells).
+pub const STATS_WORDS: u32 = 8;
+
+/// The counts the kernel left in `counters` (`STATS_SLOTS · STATS_WORDS` words), summed over
+/// the slots, each count its high word times 2³² plus its low word.
+pub fn sum_counters(words: &[u32]) -> crate::render::RayStats {
+    let mut sums = [0u64; 4];
+    for slot in words.chunks_exact(STATS_WORDS as usize) {
+        for (k, sum) in sums.iter_mut().enumerate() {
+            *sum += u64::from(slot[2 * k + 1]) << 32 | u64::from(slot[2 * k]);
+        }
+    }
+    let [non_shadow_rays, shadow_rays, intersections, cells_traversed] = sums;
+    crate::render::RayStats { non_shadow_rays, shadow_rays, intersections, cells_traversed }
 }

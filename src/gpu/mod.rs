@@ -19,6 +19,7 @@ mod specialise;
 pub mod support;
 pub mod texture_range;
 pub mod tree;
+pub mod voxels;
 
 use crate::render::{Frame, Output, RenderOptions, SphereTest, TriangleTest};
 use crate::scene::Scene;
@@ -150,6 +151,10 @@ pub struct KernelConfig {
     pub use_grid: bool,
     /// Some material is a solid texture (`shaders/texture.wgsl`).
     pub textures: bool,
+    /// `-stats`: count rays, tests and cells (`shaders/stats.wgsl`).
+    pub stats: bool,
+    /// `-visualize_grid`: draw the grid's occupied cells (`shaders/voxels.wgsl`).
+    pub voxels: bool,
 }
 
 impl KernelConfig {
@@ -176,7 +181,7 @@ impl KernelConfig {
             specular,
             specular_fix: specular && shading.specular_fix,
             point_lights: buffers.lights.iter().any(|l| l.is_point != 0),
-            shadows: shading.shadows && !buffers.lights.is_empty(),
+            shadows: shading.shadows && !options.visualize_grid && !buffers.lights.is_empty(),
             bounces: tree.depth,
             loop_canary: false,
             triangle_test: options.triangle_test,
@@ -185,6 +190,8 @@ impl KernelConfig {
             use_bins: buffers.bins.is_some(),
             use_grid: buffers.grid.is_some(),
             textures: !buffers.textures.is_empty(),
+            stats: options.stats,
+            voxels: options.visualize_grid,
         };
         // Every pixel, whatever it casts: a hierarchy that cannot cull (slivers across the
         // view), a crowded bin, a flat loop or a texture's blend passes the limit.
@@ -217,7 +224,7 @@ impl KernelConfig {
     }
 
     /// The values for `PipelineCompilationOptions::constants`.
-    pub fn constants(&self) -> [(&'static str, f64); 24] {
+    pub fn constants(&self) -> [(&'static str, f64); 26] {
         let b = |v: bool| if v { 1.0 } else { 0.0 };
         [
             ("HAS_SPHERES", b(self.has_spheres)),
@@ -244,6 +251,8 @@ impl KernelConfig {
             ("USE_BINS", b(self.use_bins)),
             ("USE_GRID", b(self.use_grid)),
             ("TEXTURES", b(self.textures)),
+            ("STATS", b(self.stats)),
+            ("VOXELS", b(self.voxels)),
         ]
     }
 }
@@ -264,7 +273,7 @@ const fn binding<T>(name: &'static str, writable: bool) -> Binding {
 /// Every binding of the kernel (`shaders/params.wgsl`), index = `@binding`. The bind-group layout and
 /// every bind group are built from this table, and `tests/layout.rs` checks it against the
 /// shader's own declarations (names, order, access, element sizes).
-pub const BINDINGS: [Binding; 15] = [
+pub const BINDINGS: [Binding; 16] = [
     binding::<layout::Params>("params", false),
     binding::<layout::GpuSphere>("spheres", false),
     binding::<layout::GpuEllipsoid>("ellipsoids", false),
@@ -280,6 +289,7 @@ pub const BINDINGS: [Binding; 15] = [
     binding::<layout::BinItem>("bin_items", false),
     binding::<layout::GpuTexture>("textures", false),
     binding::<u32>("permutation", false),
+    binding::<u32>("counters", true),
 ];
 
 /// Kernels a renderer keeps compiled (see [`GpuRenderer::pipeline`]).
@@ -287,6 +297,9 @@ const MAX_CACHED_PIPELINES: usize = 32;
 
 /// The `@binding` of the output (`pixels`).
 const OUTPUT_BINDING: usize = 7;
+
+/// The `@binding` of the `-stats` counters (`counters`).
+const COUNTERS_BINDING: usize = 15;
 
 /// A wgpu device with the ray-casting kernel, ready to render scenes.
 pub struct GpuRenderer {
@@ -323,8 +336,8 @@ pub struct RenderStats {
     pub scene_bytes: u64,
     /// How the kernel found candidates (never `Auto`: what the cost model chose).
     pub acceleration: Acceleration,
-    /// The course's statistics (`-stats`), where the renderer counted them: the reference
-    /// does; the kernel does not yet.
+    /// The course's statistics (`-stats`), where the render was asked to count them
+    /// (docs/SPEC.md §7).
     pub counted: Option<crate::render::RayStats>,
     /// The box the `-grid` cells divide, where there was a grid.
     pub grid_bounds: Option<crate::scene::Bounds>,

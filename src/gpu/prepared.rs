@@ -5,10 +5,12 @@
 //! it while the caller's thread decodes and writes tile k, so the host's share of the work
 //! (decoding, quantising, writing files) overlaps the device's instead of following it.
 
-use super::flatten::SceneBuffers;
-use super::layout::{Handover, Params, PixelLayout, PACKED_MISS, PERLIN_PERMUTATION};
-use super::{GpuError, GpuRenderer, KernelConfig, RenderStats, Timer, BINDINGS, OUTPUT_BINDING, WORKGROUP};
-use crate::render::{row_tiles, Frame, Output, RenderOptions};
+use super::flatten::{GridChoice, SceneBuffers};
+use super::layout::{Handover, Params, PixelLayout, PACKED_MISS, PERLIN_PERMUTATION, STATS_SLOTS, STATS_WORDS};
+use super::{
+    GpuError, GpuRenderer, KernelConfig, RenderStats, Timer, BINDINGS, COUNTERS_BINDING, OUTPUT_BINDING, WORKGROUP,
+};
+use crate::render::{row_tiles, Frame, Output, RayStats, RenderOptions};
 use crate::scene::Scene;
 use std::sync::mpsc::sync_channel;
 use wgpu::util::DeviceExt;
@@ -29,6 +31,15 @@ pub struct PreparedScene<'a> {
     /// [`KernelConfig::loop_canary`], or a texture was beyond its reach there,
     /// [`super::texture_range`]), to render those with the reference.
     fallback: Option<Scene>,
+    /// The kernel's `-stats` counts, shared by every tile (bound to every slot).
+    counters: Counters,
+}
+
+/// The `counters` binding: [`STATS_SLOTS`] slots of [`STATS_WORDS`] words, with a buffer to
+/// read them back, where the render counts (`-stats`); else one word no kernel touches.
+struct Counters {
+    buffer: wgpu::Buffer,
+    readback: Option<wgpu::Buffer>,
 }
 
 /// The buffers one tile in flight uses.
@@ -63,8 +74,13 @@ impl<'a> PreparedScene<'a> {
         let tree = super::support::check(scene, options).map_err(GpuError::Unsupported)?;
         super::precision::check(scene, options).map_err(GpuError::Precision)?;
         let rays = crate::camera::PrimaryRays::for_camera(&scene.camera, options.width, options.height);
-        let secondary_rays = tree.depth > 0 || (options.shading.shadows && !scene.lights.is_empty());
-        let buffers = SceneBuffers::new(scene, &rays, &gpu.options, secondary_rays, options.grid);
+        let secondary_rays =
+            tree.depth > 0 || (options.shading.shadows && !options.visualize_grid && !scene.lights.is_empty());
+        let grid = options.grid.map(|size| match options.visualize_grid {
+            true => GridChoice::Given(super::voxels::voxel_grid(scene, size, rays.center)),
+            false => GridChoice::Walk(size),
+        });
+        let buffers = SceneBuffers::new(scene, &rays, &gpu.options, secondary_rays, grid);
         let flat = buffers.bins.is_none() && buffers.bvh.is_none() && buffers.grid.is_none();
         let primitives =
             buffers.spheres.len() + buffers.ellipsoids.len() + buffers.planes.len() + buffers.triangles.len();
@@ -80,7 +96,8 @@ impl<'a> PreparedScene<'a> {
         let tile_rows = gpu.tile_rows(options.width, &layout)?;
         let tiles = options.height.div_ceil(tile_rows);
         let tile_bytes = options.width as u64 * tile_rows as u64 * layout.words() as u64 * 4;
-        let slots = (0..tiles.min(2)).map(|_| Slot::new(gpu, &inputs, tile_bytes)).collect();
+        let counters = Counters::new(gpu, options.stats);
+        let slots = (0..tiles.min(2)).map(|_| Slot::new(gpu, &inputs, &counters.buffer, tile_bytes)).collect();
         let scene_bytes = inputs.iter().flatten().map(|b| b.size()).sum();
         Ok(PreparedScene {
             gpu,
@@ -106,9 +123,10 @@ impl<'a> PreparedScene<'a> {
                 pixels_cut_short: 0,
                 pixels_beyond_reach: 0,
                 counted: None,
-                grid_bounds: None,
+                grid_bounds: options.stats.then(|| buffers.grid_world_bounds(rays.center)).flatten(),
             },
             fallback: (config.loop_canary || config.textures).then(|| scene.clone()),
+            counters,
         })
     }
 
@@ -128,6 +146,7 @@ impl<'a> PreparedScene<'a> {
         assert!(first + rows <= self.options.height, "the band lies inside the image");
         let tiles: Vec<(u32, u32)> = row_tiles(rows, self.tile_rows).map(|(offset, n)| (first + offset, n)).collect();
         let mut stats = self.stats;
+        let mut counted = self.counters.zero(self.gpu);
         std::thread::scope(|scope| {
             let (ready_tx, ready_rx) = sync_channel(self.slots.len());
             let (free_tx, free_rx) = sync_channel::<usize>(self.slots.len());
@@ -152,17 +171,26 @@ impl<'a> PreparedScene<'a> {
                 let handed = self.hand_over(slot, first_row, rows, &mut on_tile)?;
                 stats.pixels_cut_short += handed.loops_cut;
                 stats.pixels_beyond_reach += handed.beyond_reach;
+                if let Some(counted) = &mut counted {
+                    counted.add(&handed.counted);
+                }
                 stats.kernel_ns = stats.kernel_ns.zip(kernel_ns).map(|(a, b)| a + b);
                 stats.tiles += 1;
                 // The submitter may already have finished; then nobody needs the slot back.
                 let _ = free_tx.send(slot);
             }
-            Ok(stats)
-        })
+            Ok::<(), E>(())
+        })?;
+        if let Some(mut counted) = counted {
+            counted.add(&self.counters.read(self.gpu)?);
+            stats.counted = Some(counted);
+        }
+        Ok(stats)
     }
 
     /// Shows the caller the mapped tile, its pixels handed over rendered again by the
-    /// reference, then gives the buffer back to the device; returns how many were, by why.
+    /// reference, then gives the buffer back to the device; returns how many were, by why,
+    /// and what the reference counted rendering them (the kernel adds no count of theirs).
     fn hand_over<E: From<GpuError>>(
         &self,
         slot: usize,
@@ -195,35 +223,41 @@ impl<'a> PreparedScene<'a> {
     }
 
     /// The tile's words with every pixel the kernel handed over replaced by the
-    /// reference's, and how many those were; `None` when none was.
+    /// reference's, how many those were, by why, and what the reference counted rendering
+    /// the pixels cut short; `None` when none was. The kernel counted (`-stats`) the pixels
+    /// beyond a texture's reach itself, having traced them to the end, and not those cut
+    /// short, whose counts are the reference's.
     fn rerender_handed_over(&self, scene: &Scene, first_row: u32, words: &[u32]) -> Option<(Vec<u32>, HandedOver)> {
         let stride = self.layout.words() as usize;
         let width = self.options.width as usize;
-        let mut handed = HandedOver::default();
-        let marked: Vec<usize> = (0..words.len() / stride)
-            .filter(|&k| match self.layout.handover(&words[k * stride..]) {
-                Some(Handover::LoopsCut) => {
-                    handed.loops_cut += 1;
-                    true
-                }
-                Some(Handover::BeyondReach) => {
-                    handed.beyond_reach += 1;
-                    true
-                }
-                None => false,
-            })
-            .collect();
-        if marked.is_empty() {
+        let (mut cut, mut beyond) = (Vec::new(), Vec::new());
+        for k in 0..words.len() / stride {
+            match self.layout.handover(&words[k * stride..]) {
+                Some(Handover::LoopsCut) => cut.push(k),
+                Some(Handover::BeyondReach) => beyond.push(k),
+                None => {}
+            }
+        }
+        if cut.is_empty() && beyond.is_empty() {
             return None;
         }
-        let pixels: Vec<(u32, u32)> =
-            marked.iter().map(|&k| ((k % width) as u32, first_row + (k / width) as u32)).collect();
-        let reference = crate::cpu::Reference::new(scene, &self.options).pixels(&pixels);
+        let reference = crate::cpu::Reference::new(scene, &self.options);
         let mut out = words.to_vec();
-        for (n, &k) in marked.iter().enumerate() {
-            self.layout.encode(&reference.pixel(n), &mut out[k * stride..(k + 1) * stride]);
-        }
-        Some((out, handed))
+        let mut render_again = |marked: &[usize]| {
+            if marked.is_empty() {
+                return;
+            }
+            let pixels: Vec<(u32, u32)> =
+                marked.iter().map(|&k| ((k % width) as u32, first_row + (k / width) as u32)).collect();
+            let rendered = reference.pixels(&pixels);
+            for (n, &k) in marked.iter().enumerate() {
+                self.layout.encode(&rendered.pixel(n), &mut out[k * stride..(k + 1) * stride]);
+            }
+        };
+        render_again(&cut);
+        let counted = reference.stats();
+        render_again(&beyond);
+        Some((out, HandedOver { loops_cut: cut.len() as u64, beyond_reach: beyond.len() as u64, counted }))
     }
 
     fn tile_bytes(&self, rows: u32) -> u64 {
@@ -267,7 +301,12 @@ impl<'a> PreparedScene<'a> {
 }
 
 impl Slot {
-    fn new(gpu: &GpuRenderer, inputs: &[Option<wgpu::Buffer>; BINDINGS.len()], tile_bytes: u64) -> Slot {
+    fn new(
+        gpu: &GpuRenderer,
+        inputs: &[Option<wgpu::Buffer>; BINDINGS.len()],
+        counters: &wgpu::Buffer,
+        tile_bytes: u64,
+    ) -> Slot {
         let buffer = |label, size, usage| {
             gpu.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
@@ -285,6 +324,7 @@ impl Slot {
                 let resource = match k {
                     0 => &params,
                     OUTPUT_BINDING => &output,
+                    COUNTERS_BINDING => counters,
                     _ => inputs[k].as_ref().expect("every input binding is uploaded"),
                 };
                 wgpu::BindGroupEntry { binding: k as u32, resource: resource.as_entire_binding() }
@@ -297,6 +337,54 @@ impl Slot {
         });
         let timer = gpu.timestamps.then(|| Timer::new(&gpu.device));
         Slot { params, output, readback, bind_group, timer }
+    }
+}
+
+impl Counters {
+    const WORDS: u64 = STATS_SLOTS as u64 * STATS_WORDS as u64;
+
+    fn new(gpu: &GpuRenderer, stats: bool) -> Counters {
+        use wgpu::BufferUsages as U;
+        let size = if stats { Self::WORDS * 4 } else { 4 };
+        let buffer = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("counters"),
+            size,
+            usage: U::STORAGE | U::COPY_SRC | U::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let readback = stats.then(|| {
+            gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("counters readback"),
+                size,
+                usage: U::MAP_READ | U::COPY_DST,
+                mapped_at_creation: false,
+            })
+        });
+        Counters { buffer, readback }
+    }
+
+    /// Zeroes the counts before a render that counts (ordered before its tiles, which are
+    /// submitted after); `None` for a render that does not.
+    fn zero(&self, gpu: &GpuRenderer) -> Option<RayStats> {
+        self.readback.as_ref()?;
+        gpu.queue.write_buffer(&self.buffer, 0, &[0; Self::WORDS as usize * 4]);
+        Some(RayStats::default())
+    }
+
+    /// What the kernel counted since [`Counters::zero`], once its tiles are done.
+    fn read(&self, gpu: &GpuRenderer) -> Result<RayStats, GpuError> {
+        let readback = self.readback.as_ref().expect("read only where counted");
+        let mut encoder =
+            gpu.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("counters") });
+        encoder.copy_buffer_to_buffer(&self.buffer, 0, readback, 0, Self::WORDS * 4);
+        let submission = gpu.queue.submit([encoder.finish()]);
+        map_and_wait(&gpu.device, &readback.slice(..), submission)?;
+        let counted = {
+            let view = readback.slice(..).get_mapped_range().map_err(|e| GpuError::Readback(e.to_string()))?;
+            super::layout::sum_counters(bytemuck::cast_slice(&view))
+        };
+        readback.unmap();
+        Ok(counted)
     }
 }
 
@@ -328,6 +416,7 @@ fn upload_inputs(
         Some(non_empty(bins.map_or(&[][..], |b| &b.items))),
         Some(non_empty(&buffers.textures)),
         Some(non_empty(if buffers.textures.is_empty() { &[][..] } else { &PERLIN_PERMUTATION[..] })),
+        None,
     ];
     let mut out: [Option<wgpu::Buffer>; BINDINGS.len()] = Default::default();
     for (k, bytes) in contents.iter().enumerate() {
@@ -423,9 +512,11 @@ fn rgb_of(words: impl Iterator<Item = u32>) -> Vec<u8> {
     out
 }
 
-/// Pixels of a tile the reference rendered for the kernel, by why ([`Handover`]).
+/// Pixels of a tile the reference rendered for the kernel, by why ([`Handover`]), and what
+/// it counted rendering them (`-stats`).
 #[derive(Clone, Copy, Debug, Default)]
 struct HandedOver {
     loops_cut: u64,
     beyond_reach: u64,
+    counted: RayStats,
 }

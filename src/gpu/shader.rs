@@ -12,6 +12,7 @@ use std::sync::OnceLock;
 /// and the entry points last.
 ///
 /// - `params.wgsl`: `override` switches, the structs shared with the host, the bindings;
+/// - `stats.wgsl`: the `-stats` counters, compiled in only where asked for;
 /// - `ray.wgsl`, `camera.wgsl`: the ray, its interval, primary rays;
 /// - `sphere.wgsl`, `ellipsoid.wgsl`, `plane.wgsl`, `triangle.wgsl`: ray/primitive tests,
 ///   each returning the nearest t or `NO_HIT`;
@@ -19,6 +20,7 @@ use std::sync::OnceLock;
 /// - `bvh.wgsl`: the box test, the nearest-hit and any-hit walks;
 /// - `bins.wgsl`: primary-ray triangles and the packet's walk of a bin;
 /// - `grid.wgsl`: the 3D-DDA through the `-grid`'s cells, nearest and any hit;
+/// - `voxels.wgsl`: the `-visualize_grid` picture, the grid's occupied cells as boxes;
 /// - `occluded.wgsl`: the any-hit query;
 /// - `surface.wgsl`, `texture.wgsl`, `shading.wgsl`, `tree.wgsl`, `output.wgsl`: the nearest hit's surface
 ///   and where rays leaving it start, solid textures (Perlin's improved noise), its directly
@@ -29,8 +31,9 @@ use std::sync::OnceLock;
 /// Plain concatenation, not a composer such as naga_oil: nothing is resolved at run time,
 /// no dependency is added, and naga sees one module as it did when the kernel was one file
 /// (lavapipe's compile time, measured with an empty shader cache, did not change).
-pub const FILES: [(&str, &str); 18] = [
+pub const FILES: [(&str, &str); 20] = [
     ("params.wgsl", include_str!("../../shaders/params.wgsl")),
+    ("stats.wgsl", include_str!("../../shaders/stats.wgsl")),
     ("ray.wgsl", include_str!("../../shaders/ray.wgsl")),
     ("camera.wgsl", include_str!("../../shaders/camera.wgsl")),
     ("sphere.wgsl", include_str!("../../shaders/sphere.wgsl")),
@@ -41,6 +44,7 @@ pub const FILES: [(&str, &str); 18] = [
     ("bvh.wgsl", include_str!("../../shaders/bvh.wgsl")),
     ("bins.wgsl", include_str!("../../shaders/bins.wgsl")),
     ("grid.wgsl", include_str!("../../shaders/grid.wgsl")),
+    ("voxels.wgsl", include_str!("../../shaders/voxels.wgsl")),
     ("occluded.wgsl", include_str!("../../shaders/occluded.wgsl")),
     ("surface.wgsl", include_str!("../../shaders/surface.wgsl")),
     ("texture.wgsl", include_str!("../../shaders/texture.wgsl")),
@@ -74,6 +78,8 @@ pub fn host_constants() -> String {
             crate::scene::MAX_TEXTURE_NESTING as u32 + 1,
             "materials waiting in a texture's blend (scene::MAX_TEXTURE_NESTING + 1)",
         ),
+        ("STATS_SLOTS", super::layout::STATS_SLOTS, "slots of the -stats counters (gpu::layout)"),
+        ("STATS_WORDS", super::layout::STATS_WORDS, "words of one slot of the -stats counters (gpu::layout)"),
     ];
     for (name, value, what) in sizes {
         let _ = writeln!(out, "// {what}\nconst {name}: u32 = {value}u;");

@@ -4,12 +4,14 @@
 //! shadows, reflection and refraction, solid textures, whose materials each spawn their
 //! own rays); what it refuses is a ray tree larger than its stack holds
 //! ([`TREE_STACK`](super::tree::TREE_STACK) slots: 15 bounces that a path's weight can
-//! still reach, fewer where a texture blends several mirrors or glasses, [`super::tree`]). A driver that cuts long loops short (lavapipe,
-//! docs/lavapipe.md) is no reason to refuse: the kernel marks the pixels it cut, and the
-//! reference renders them ([`super::PreparedScene`]).
+//! still reach, fewer where a texture blends several mirrors or glasses, [`super::tree`]).
+//! A driver that cuts long loops short (lavapipe, docs/lavapipe.md) is no reason to refuse:
+//! the kernel marks the pixels it cut, and the reference renders them
+//! ([`super::PreparedScene`]).
 //!
-//! `-visualize_grid` and `-stats` (the course's assignments 5 and 6) it refuses for now:
-//! the reference renders them (docs/SPEC.md §7). `-grid` it walks like the reference.
+//! The course's assignments 5 and 6 it renders too (docs/SPEC.md §7): `-grid` it walks
+//! like the reference, `-visualize_grid` it draws from the reference's occupancy
+//! ([`super::voxels`]), and `-stats` it counts in the kernel when asked (shaders/stats.wgsl).
 //!
 //! The flags that shape only the course's OpenGL preview (`-gui`, `-tessellation`,
 //! `-gouraud`) change no pixel of the files, so the kernel honours them by ignoring them.
@@ -40,10 +42,12 @@ impl fmt::Display for UnsupportedError {
 impl std::error::Error for UnsupportedError {}
 
 /// The shape of the kernel's ray tree for `scene` at `options`, or why its stack cannot
-/// hold it, or the course's flag it does not implement yet ([`voxels_or_stats`]).
+/// hold it.
 pub fn check(scene: &Scene, options: &RenderOptions) -> Result<TreeShape, UnsupportedError> {
-    if let Some(what) = voxels_or_stats(options) {
-        return Err(UnsupportedError { file: scene.path.clone(), location: None, what });
+    if options.visualize_grid {
+        // The voxel picture traces primary rays only and shades cells, never a material.
+        let primary = crate::render::Shading { bounces: 0, shadows: false, ..options.shading };
+        return Ok(TreeShape::new(scene, &primary));
     }
     let shape = TreeShape::new(scene, &options.shading);
     if !shape.fits_stack() {
@@ -65,13 +69,4 @@ pub fn check(scene: &Scene, options: &RenderOptions) -> Result<TreeShape, Unsupp
         });
     }
     Ok(shape)
-}
-
-/// Why the kernel refuses the course's `-visualize_grid` and `-stats`, the first one given:
-/// it draws no voxels and counts nothing yet. (`-grid` itself it walks: shaders/grid.wgsl.)
-fn voxels_or_stats(options: &RenderOptions) -> Option<String> {
-    if options.visualize_grid {
-        return Some("-visualize_grid: the GPU kernel does not draw the grid's cells yet".into());
-    }
-    options.stats.then(|| "-stats: the GPU kernel does not count rays, tests or cells yet".into())
 }

@@ -33,6 +33,7 @@
 //!   beyond reach is handed over to the reference ([`super::layout::Handover`]).
 
 use super::precision_error::{show, Limit, PrecisionError};
+use crate::render::RenderOptions;
 use crate::scene::{try_for_each_leaf, Bounds, Leaf, Scene, Shape, Texture, TextureKind};
 use glam::{DMat4, DVec3};
 
@@ -51,8 +52,9 @@ pub const CHECKER_RATE: f64 = 32.0;
 /// Whether every texture of `scene` is worn by bounded primitives only where f32 places
 /// its points faithfully (see the module's contract); the first texture that is not, in
 /// file order of the primitives wearing it, otherwise. Planes the kernel checks hit by hit.
-pub fn check(scene: &Scene) -> Result<(), PrecisionError> {
-    if !scene.has_textures() {
+pub fn check(scene: &Scene, options: &RenderOptions) -> Result<(), PrecisionError> {
+    // The voxel picture (-visualize_grid) shades cells, never a material.
+    if !scene.has_textures() || options.visualize_grid {
         return Ok(());
     }
     let to_camera = DMat4::from_translation(-scene.camera.center);
