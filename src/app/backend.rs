@@ -193,7 +193,9 @@ fn reference_band<E>(
 ) -> Result<RenderStats, E> {
     let reference = Reference::new(scene, options);
     let mut stats = RenderStats::default();
-    for (offset, rows) in row_tiles(rows, CPU_TILE_PIXELS / options.width) {
+    // Samples are kept until the tile is filtered: fewer rows per tile the more there are.
+    let samples = options.sampling.map_or(1, |s| s.count());
+    for (offset, rows) in row_tiles(rows, CPU_TILE_PIXELS / options.width / samples) {
         let first_row = first + offset;
         on_tile(first_row, reference.rows(first_row, rows))?;
         stats.tiles += 1;
@@ -214,7 +216,8 @@ pub const REFERENCE_QUICKER_BELOW: u64 = 2_000_000;
 /// so small that the device's start-up would dominate. Counts every primitive for every
 /// pixel, an upper bound of the reference's work.
 pub fn reference_is_quicker(scene: &Scene, options: &RenderOptions) -> bool {
-    options.pixel_count() as u64 * scene.primitive_counts().total() as u64 <= REFERENCE_QUICKER_BELOW
+    let samples = options.sampling.map_or(1, |s| s.count()) as u64;
+    options.pixel_count() as u64 * samples * scene.primitive_counts().total() as u64 <= REFERENCE_QUICKER_BELOW
 }
 
 /// Primitives (each triangle of a mesh counted) up to which `auto` traces a scene that needs

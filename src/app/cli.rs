@@ -7,12 +7,13 @@
 //! are one line naming the flag; the binary exits with status 2 on them.
 
 use crate::app::args::{
-    BenchArgs, Command, CommandLine, DepthArgs, Habits, RenderArgs, Split, StitchArgs, UsageError, Verbosity,
+    BenchArgs, Command, CommandLine, DepthArgs, Habits, Picture, RenderArgs, Split, StitchArgs, UsageError, Verbosity,
     MAX_PIXELS, MAX_SIDE,
 };
 use crate::app::flags::{self, flag_name, Answer, Flag, Given, Takes, Verb};
 use raycaster::grid::GridSize;
 use raycaster::render::{Output, Outputs};
+use raycaster::sampling::{Sampler, Sampling, DEFAULT_FILTER, MAX_SAMPLES};
 use std::ffi::OsString;
 use std::path::PathBuf;
 
@@ -132,6 +133,7 @@ fn render_or_compare(verb: Verb, given: Given) -> Result<Command, UsageError> {
         return Err(UsageError(format!("--tile {}/{}: more bands than the image's {height} rows", t.index, t.count)));
     }
     let named = given.files.outputs();
+    let sampling = sampling(&given);
     let args = RenderArgs {
         input: given.input.expect("required"),
         width,
@@ -147,13 +149,19 @@ fn render_or_compare(verb: Verb, given: Given) -> Result<Command, UsageError> {
         grid: given.grid,
         visualize_grid: given.visualize_grid,
         stats: given.stats,
+        sampling,
+        pictures: given.pictures,
     };
+    pictures_fit(&args)?;
+    if args.tile.is_some() && !args.pictures.is_empty() {
+        return Err(UsageError("--tile: -render_samples and -render_filter pictures are not split into bands".into()));
+    }
     if args.visualize_grid && args.grid.is_none() {
         return Err(UsageError("-visualize_grid draws the grid's cells: give -grid NX NY NZ too".into()));
     }
     if verb == Verb::Render {
         // `-gui` alone asks for the course's window only: nothing to render, not an error.
-        if named.is_empty() && !given.gui {
+        if named.is_empty() && args.pictures.is_empty() && !given.gui {
             return Err(UsageError("nothing to write: give -output, -normals or -depth".into()));
         }
         return Ok(Command::Render(args));
@@ -163,6 +171,37 @@ fn render_or_compare(verb: Verb, given: Given) -> Result<Command, UsageError> {
         return Err(UsageError("compare: nothing to compare: give --outputs color,normals,depth".into()));
     }
     Ok(Command::Compare { args, outputs, max_diff_pixels: given.max_diff_pixels })
+}
+
+/// docs/SPEC.md §8: a sampler or a filter asks for sampling; the sampler defaults to one
+/// sample at the pixel's centre, the filter to the box of radius ½.
+fn sampling(given: &Given) -> Option<Sampling> {
+    if given.sampler.is_none() && given.filter.is_none() {
+        return None;
+    }
+    Some(Sampling {
+        sampler: given.sampler.unwrap_or(Sampler::Uniform(1)),
+        filter: given.filter.unwrap_or(DEFAULT_FILTER),
+        seed: given.seed.unwrap_or(0),
+    })
+}
+
+/// The pictures' sizes: `W·ZOOM × H·ZOOM` (the filter's one more each way) within the
+/// image limits of `-size`.
+fn pictures_fit(args: &RenderArgs) -> Result<(), UsageError> {
+    for (flag, picture) in args.pictures.named() {
+        let extra = u64::from(flag == "-render_filter");
+        let (w, h) =
+            (args.width as u64 * picture.zoom as u64 + extra, args.height as u64 * picture.zoom as u64 + extra);
+        if w > MAX_SIDE as u64 || h > MAX_SIDE as u64 || w * h > MAX_PIXELS {
+            return Err(UsageError(format!(
+                "{flag} {} {}: a picture of {w}×{h} pixels is past the limits of -size",
+                picture.path.display(),
+                picture.zoom
+            )));
+        }
+    }
+    Ok(())
 }
 
 /// Where `raycaster bench` looks for the course's files without `--corpus`:
@@ -230,6 +269,9 @@ impl<'a> Values<'a> {
             Takes::Cells(set) => set(given, self.cells(text)?),
             Takes::Choice { names, set } => set(given, self.choice(text, &names())?),
             Takes::Real { what, set } => set(given, self.real(text, what)?),
+            Takes::Positive { what, set } => set(given, self.positive(text, what)?),
+            Takes::Samples { square, set } => set(given, self.samples(text, *square)?),
+            Takes::Picture(set) => set(given, self.picture(text)?),
             Takes::Number { what, min, max, set } => set(given, self.number(text, what, *min, *max)?),
             Takes::Split(set) => set(given, self.split(text)?),
             Takes::Outputs(set) => set(given, self.outputs(text)?),
@@ -376,6 +418,44 @@ impl<'a> Values<'a> {
         match text.parse::<f64>() {
             Ok(w) if w.is_finite() && w >= 0.0 => Ok(w),
             _ => Err(UsageError(format!("{flag}: '{text}' is not a number ≥ 0"))),
+        }
+    }
+
+    /// A filter's radius or σ: a finite number > 0.
+    fn positive(&mut self, flag: &str, what: &str) -> Result<f64, UsageError> {
+        let value = self.take(flag, what)?;
+        let text = value.to_string_lossy();
+        match text.parse::<f64>() {
+            Ok(w) if w.is_finite() && w > 0.0 => Ok(w),
+            _ => Err(UsageError(format!("{flag}: '{text}' is not a number > 0"))),
+        }
+    }
+
+    /// Samples per pixel: 1…[`MAX_SAMPLES`], with `square` a perfect square (the regular
+    /// patterns lay them on a √n × √n grid).
+    fn samples(&mut self, flag: &str, square: bool) -> Result<u32, UsageError> {
+        let n = self.number(flag, "a number of samples", 1, MAX_SAMPLES as u64)? as u32;
+        if square && n.isqrt() * n.isqrt() != n {
+            let (below, above) = (n.isqrt() * n.isqrt(), (n.isqrt() + 1) * (n.isqrt() + 1));
+            return Err(UsageError(format!(
+                "{flag}: {n} is not a square number: the samples lie on a √n×√n grid (try {below} or {above})"
+            )));
+        }
+        Ok(n)
+    }
+
+    /// `FILE ZOOM` of `-render_samples` and `-render_filter`.
+    fn picture(&mut self, flag: &str) -> Result<Picture, UsageError> {
+        let what = "two values: FILE ZOOM";
+        let path = self.take(flag, what)?;
+        if path.is_empty() {
+            return Err(UsageError(format!("{flag} expects a file name, got an empty one")));
+        }
+        let zoom = self.take(flag, what)?;
+        let text = zoom.to_string_lossy();
+        match text.parse::<u32>() {
+            Ok(zoom) if (1..=MAX_SIDE).contains(&zoom) => Ok(Picture { path: PathBuf::from(path), zoom }),
+            _ => Err(UsageError(format!("{flag}: '{text}' is not a whole number from 1 to {MAX_SIDE}"))),
         }
     }
 
