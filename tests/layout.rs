@@ -254,6 +254,7 @@ fn override_constants_match_the_host() {
         use_bins: false,
         use_grid: false,
         textures: true,
+        stage: raycaster::gpu::Stage::Pixels,
     };
     let mut host: Vec<String> = config.constants().iter().map(|(name, _)| name.to_string()).collect();
     host.sort();
@@ -330,7 +331,7 @@ fn sizes_match_the_host() {
     assert_eq!(shader_constant(&m, "BIN_SIDE"), naga::Literal::U32(raycaster::gpu::binning::BIN_SIDE));
     assert_eq!(shader_constant(&m, "WORKGROUP"), naga::Literal::U32(raycaster::gpu::WORKGROUP));
     let names: Vec<&str> = m.entry_points.iter().map(|e| e.name.as_str()).collect();
-    assert_eq!(names.len(), 2, "{names:?}");
+    assert_eq!(names.len(), 4, "{names:?}");
     for entry in &m.entry_points {
         let w = raycaster::gpu::WORKGROUP;
         assert_eq!(entry.workgroup_size, [w, w, 1], "{}", entry.name);

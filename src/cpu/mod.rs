@@ -101,8 +101,27 @@ impl<'a> Reference<'a> {
         Frame::from_pixels(&one_row, self.render_pixels(pixels))
     }
 
-    /// The listed pixels' results, in that order, rendered in parallel.
+    /// The listed pixels' results, in that order, rendered in parallel. With sampling, each
+    /// pixel filters its own and its neighbours' samples (traced for it alone).
     fn render_pixels(&self, pixels: &[(u32, u32)]) -> Vec<Pixel> {
+        if let Some(sampling) = self.options.sampling {
+            return pixels
+                .par_iter()
+                .map(|&(i, row)| {
+                    let (r, height) = (sampling.radius(), self.options.height);
+                    let top = row.saturating_sub(r);
+                    let bottom = (row + 1).saturating_add(r).min(height);
+                    let (left, right) = (i.saturating_sub(r), (i + 1).saturating_add(r).min(self.options.width));
+                    let mut stats = RayStats::default();
+                    let samples: Vec<Vec<((f64, f64), Pixel)>> = (top..bottom)
+                        .flat_map(|row2| (left..right).map(move |i2| (i2, row2)))
+                        .map(|(i2, row2)| self.samples(&sampling, i2, height - 1 - row2, &mut stats))
+                        .collect();
+                    let at = |i2: u32, row2: u32| &samples[((row2 - top) * (right - left) + i2 - left) as usize][..];
+                    self.filtered_pixel(&sampling, i, row, at)
+                })
+                .collect();
+        }
         pixels
             .par_iter()
             .map(|&(i, row)| {
@@ -151,36 +170,47 @@ impl<'a> Reference<'a> {
         let out: Vec<(u32, u32)> = band.clone().flat_map(|row| (0..width).map(move |i| (i, row))).collect();
         let filtered: Vec<Pixel> = out
             .par_iter()
-            .map(|&(i, row)| {
-                let r = radius as i64;
-                let mut sum = FilterSum::default();
-                for dr in -r..=r {
-                    let row2 = row as i64 + dr;
-                    if row2 < 0 || row2 >= height as i64 {
-                        continue;
-                    }
-                    for di in -r..=r {
-                        let i2 = i as i64 + di;
-                        if i2 < 0 || i2 >= width as i64 {
-                            continue;
-                        }
-                        // Rows run down the image; the sample's y runs up.
-                        for &((sx, sy), sample) in at(i2 as u32, row2 as u32) {
-                            let (dx, dy) = (di as f64 + sx - 0.5, -dr as f64 + sy - 0.5);
-                            sum.add(sampling.filter.weight(dx, dy), &sample);
-                        }
-                    }
-                }
-                if sum.weight == 0.0 {
-                    // No sample weighs (a filter narrower than the gaps between samples):
-                    // the plain average of the pixel's own.
-                    sum = FilterSum::default();
-                    at(i, row).iter().for_each(|(_, sample)| sum.add(1.0, sample));
-                }
-                sum.pixel()
-            })
+            .map(|&(i, row)| self.filtered_pixel(sampling, i, row, |i2, row2| &at(i2, row2)[..]))
             .collect();
         Frame::from_pixels(&RenderOptions { height: rows, ..self.options }, filtered)
+    }
+
+    /// docs/SPEC.md §8: pixel (i, row from the top) from the samples `at(i2, row2)` of the
+    /// pixels within the support radius, cropped at the image's border.
+    fn filtered_pixel<'s>(
+        &self,
+        sampling: &Sampling,
+        i: u32,
+        row: u32,
+        at: impl Fn(u32, u32) -> &'s [((f64, f64), Pixel)],
+    ) -> Pixel {
+        let (width, height) = (self.options.width as i64, self.options.height as i64);
+        let r = sampling.radius() as i64;
+        let mut sum = FilterSum::default();
+        for dr in -r..=r {
+            let row2 = row as i64 + dr;
+            if row2 < 0 || row2 >= height {
+                continue;
+            }
+            for di in -r..=r {
+                let i2 = i as i64 + di;
+                if i2 < 0 || i2 >= width {
+                    continue;
+                }
+                // Rows run down the image; the sample's y runs up.
+                for &((sx, sy), sample) in at(i2 as u32, row2 as u32) {
+                    let (dx, dy) = (di as f64 + sx - 0.5, -dr as f64 + sy - 0.5);
+                    sum.add(sampling.filter.weight(dx, dy), &sample);
+                }
+            }
+        }
+        if sum.weight == 0.0 {
+            // No sample weighs (a filter narrower than the gaps between samples): the plain
+            // average of the pixel's own.
+            sum = FilterSum::default();
+            at(i, row).iter().for_each(|(_, sample)| sum.add(1.0, sample));
+        }
+        sum.pixel()
     }
 
     /// Pixel (i from the left, j from the bottom): the kernel's stages, in its order.

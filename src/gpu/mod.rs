@@ -149,6 +149,21 @@ pub struct KernelConfig {
     pub use_grid: bool,
     /// Some material is a solid texture (`shaders/texture.wgsl`).
     pub textures: bool,
+    /// Which of the kernel's passes this pipeline runs.
+    pub stage: Stage,
+}
+
+/// The kernel's passes: one pass for a pixel's centre sample, or, with sampling
+/// (docs/SPEC.md §8), a pass tracing every sample and a pass filtering them.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Stage {
+    /// `main` or `main_bins`: one sample per pixel, at its centre.
+    #[default]
+    Pixels,
+    /// `main_samples`: one invocation per sample.
+    Samples,
+    /// `main_filter`: one invocation per output pixel, reading the samples.
+    Filter,
 }
 
 impl KernelConfig {
@@ -184,6 +199,7 @@ impl KernelConfig {
             use_bins: buffers.bins.is_some(),
             use_grid: buffers.grid.is_some(),
             textures: !buffers.textures.is_empty(),
+            stage: Stage::Pixels,
         };
         // Every pixel, whatever it casts: a hierarchy that cannot cull (slivers across the
         // view), a crowded bin, a flat loop or a texture's blend passes the limit.
@@ -203,6 +219,11 @@ impl KernelConfig {
 
     /// The kernel's entry point: `main_bins` renders packets from bins, `main` one pixel.
     pub fn entry_point(&self) -> &'static str {
+        match self.stage {
+            Stage::Samples => return "main_samples",
+            Stage::Filter => return "main_filter",
+            Stage::Pixels => {}
+        }
         if self.use_bins {
             "main_bins"
         } else {
@@ -263,7 +284,7 @@ const fn binding<T>(name: &'static str, writable: bool) -> Binding {
 /// Every binding of the kernel (`shaders/params.wgsl`), index = `@binding`. The bind-group layout and
 /// every bind group are built from this table, and `tests/layout.rs` checks it against the
 /// shader's own declarations (names, order, access, element sizes).
-pub const BINDINGS: [Binding; 15] = [
+pub const BINDINGS: [Binding; 17] = [
     binding::<layout::Params>("params", false),
     binding::<layout::GpuSphere>("spheres", false),
     binding::<layout::GpuEllipsoid>("ellipsoids", false),
@@ -279,6 +300,8 @@ pub const BINDINGS: [Binding; 15] = [
     binding::<layout::BinItem>("bin_items", false),
     binding::<layout::GpuTexture>("textures", false),
     binding::<u32>("permutation", false),
+    binding::<u32>("samples", true),
+    binding::<layout::GpuSampling>("sampling", false),
 ];
 
 /// Kernels a renderer keeps compiled (see [`GpuRenderer::pipeline`]).
@@ -286,6 +309,14 @@ const MAX_CACHED_PIPELINES: usize = 32;
 
 /// The `@binding` of the output (`pixels`).
 const OUTPUT_BINDING: usize = 7;
+
+/// The `@binding`s of the samples of a tile and of their parameters (per slot, like the
+/// output).
+const SAMPLES_BINDING: usize = 15;
+const SAMPLING_BINDING: usize = 16;
+
+/// The most bytes of samples one tile holds (the overlap rows of the filter included).
+pub const MAX_SAMPLE_BYTES: u64 = 64 << 20;
 
 /// A wgpu device with the ray-casting kernel, ready to render scenes.
 pub struct GpuRenderer {

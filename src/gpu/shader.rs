@@ -29,7 +29,7 @@ use std::sync::OnceLock;
 /// Plain concatenation, not a composer such as naga_oil: nothing is resolved at run time,
 /// no dependency is added, and naga sees one module as it did when the kernel was one file
 /// (lavapipe's compile time, measured with an empty shader cache, did not change).
-pub const FILES: [(&str, &str); 18] = [
+pub const FILES: [(&str, &str); 20] = [
     ("params.wgsl", include_str!("../../shaders/params.wgsl")),
     ("ray.wgsl", include_str!("../../shaders/ray.wgsl")),
     ("camera.wgsl", include_str!("../../shaders/camera.wgsl")),
@@ -48,6 +48,8 @@ pub const FILES: [(&str, &str); 18] = [
     ("tree.wgsl", include_str!("../../shaders/tree.wgsl")),
     ("output.wgsl", include_str!("../../shaders/output.wgsl")),
     ("entry.wgsl", include_str!("../../shaders/entry.wgsl")),
+    ("sampling.wgsl", include_str!("../../shaders/sampling.wgsl")),
+    ("filter.wgsl", include_str!("../../shaders/filter.wgsl")),
 ];
 
 /// The constants the host owns, as WGSL `const`s: sizes that must agree with how the host

@@ -46,19 +46,7 @@ pub fn check(scene: &Scene, options: &RenderOptions) -> Result<TreeShape, Unsupp
     if let Some(what) = voxels_or_stats(options) {
         return Err(UnsupportedError { file: scene.path.clone(), location: None, what });
     }
-    if let Some(sampling) = &options.sampling {
-        return Err(UnsupportedError {
-            file: scene.path.clone(),
-            location: None,
-            what: format!(
-                "{} {} with {} {}: the GPU kernel does not take several samples per pixel or filter them yet",
-                sampling.sampler.flag(),
-                sampling.count(),
-                sampling.filter.flag(),
-                sampling.filter.parameter()
-            ),
-        });
-    }
+
     refuse_texture_rays(scene, options)?;
     let shape = TreeShape::new(scene, &options.shading);
     if !shape.fits_stack() {
