@@ -180,6 +180,22 @@ fn host_structs_match_the_shader() {
     );
     check(
         &m,
+        "Sampling",
+        size_of::<raycaster::gpu::layout::GpuSampling>(),
+        &[
+            ("count", offset_of!(raycaster::gpu::layout::GpuSampling, count)),
+            ("side", offset_of!(raycaster::gpu::layout::GpuSampling, side)),
+            ("seed", offset_of!(raycaster::gpu::layout::GpuSampling, seed)),
+            ("kind", offset_of!(raycaster::gpu::layout::GpuSampling, kind)),
+            ("filter_kind", offset_of!(raycaster::gpu::layout::GpuSampling, filter_kind)),
+            ("radius", offset_of!(raycaster::gpu::layout::GpuSampling, radius)),
+            ("parameter", offset_of!(raycaster::gpu::layout::GpuSampling, parameter)),
+            ("first_row", offset_of!(raycaster::gpu::layout::GpuSampling, first_row)),
+            ("rows", offset_of!(raycaster::gpu::layout::GpuSampling, rows)),
+        ],
+    );
+    check(
+        &m,
         "BvhNode",
         size_of::<BvhNode>(),
         &[

@@ -268,3 +268,197 @@ fn the_course_images_of_assignment_7() {
     }
     assert!(failures.is_empty(), "{failures:#?}");
 }
+
+/// Every line of the course's `a7/commands.txt`, as written, inside a copy of the folder, on
+/// the reference and on the GPU (`--backend gpu`; a refusal must be one the kernel states,
+/// and leaves no image): each exits 0 and writes the files it names (`-output`,
+/// `-render_samples`, `-render_filter`), and every GPU image is held to the 0.1 % contract
+/// against the reference's. The pictures are the app's from the reference's samples, so
+/// both backends write the same bytes.
+#[test]
+fn every_assignment_7_line_on_both_backends() {
+    let Some(corpus) = common::corpus() else { return };
+    let lines = common::course_commands(&corpus, "a7");
+    assert_eq!(lines.len(), 62, "a7/commands.txt");
+    let (cpu, gpu) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
+    common::copy_course_folder(&corpus, "a7", cpu.path());
+    common::copy_course_folder(&corpus, "a7", gpu.path());
+    let gpu_here = common::gpu().is_some();
+    let (mut failures, mut compared, mut refused) = (Vec::new(), 0, Vec::new());
+    let start = std::time::Instant::now();
+    for command in &lines {
+        let written: Vec<&String> = ["-output", "-render_samples", "-render_filter"]
+            .iter()
+            .filter_map(|flag| command.iter().position(|a| a == flag).map(|k| &command[k + 1]))
+            .collect();
+        assert!(!written.is_empty(), "{}", command.join(" "));
+        let mut args: Vec<&str> = command.iter().map(String::as_str).collect();
+        args.extend(["--backend", "cpu", "-q"]);
+        let out = raycaster_in(cpu.path(), &args);
+        assert!(out.status.success(), "{}: {}", command.join(" "), stderr(&out));
+        for file in &written {
+            assert!(cpu.path().join(file).exists(), "{}: no {file}", command.join(" "));
+        }
+        if !gpu_here {
+            continue;
+        }
+        *args.iter_mut().rev().nth(1).unwrap() = "gpu";
+        let out = raycaster_in(gpu.path(), &args);
+        if !out.status.success() {
+            let said = stderr(&out);
+            let known = said.contains("outside the range the GPU's f32 kernel renders faithfully")
+                || said.contains("the GPU kernel does not trace a texture's reflected and refracted rays yet");
+            if !known || written.iter().any(|f| gpu.path().join(f).exists()) {
+                failures.push(format!("{}: the GPU failed: {said}", command.join(" ")));
+            }
+            refused.push(written[0].clone());
+            continue;
+        }
+        for file in &written {
+            let (off, pixels, max) = diff(&gpu.path().join(file), &cpu.path().join(file));
+            let tie = anti_diagonal_ties(command, &gpu.path().join(file), &cpu.path().join(file));
+            if command.contains(&"-output".to_string()) {
+                let ties = if tie { " (all on the edge x + y = 0, see anti_diagonal_ties)" } else { "" };
+                println!("  {file:<26} GPU against the reference: {off} of {pixels} off, max {max}{ties}");
+            }
+            compared += 1;
+            if !within(off, pixels) && !tie {
+                failures.push(format!("{file}: {off} of {pixels} pixels more than 1 level off (max {max})"));
+            }
+        }
+    }
+    println!(
+        "{} lines, {compared} GPU files compared, refused by the kernel: {refused:?}; {:.1} s",
+        lines.len(),
+        start.elapsed().as_secs_f64()
+    );
+    assert!(failures.is_empty(), "{failures:#?}");
+}
+
+/// The one known exception to the contract among the course's lines: scene7_01 at 12 × 12
+/// with `-uniform_samples 9`, whose triangle has the edge x + y = 0 exactly, through the
+/// image's anti-diagonal, and whose regular samples lie on it exactly (pixel i, j's samples
+/// (⅙, ⅚), (½, ½), (⅚, ⅙) where i + j = 11): f32 and f64 round those rays to either side
+/// of the edge, a ninth of a pixel each, and 144 pixels allow no pixel off under the 0.1 %
+/// rule. True when every pixel more than 1 level off lies within the filter's support
+/// radius (2 at most on these lines) plus one of the anti-diagonal.
+fn anti_diagonal_ties(command: &[String], ours: &Path, reference: &Path) -> bool {
+    let line = command.join(" ");
+    if !(line.contains("scene7_01_sphere_triangle.txt -size 12 12") && line.contains("-uniform_samples 9")) {
+        return false;
+    }
+    let (a, b) = (raycaster::image_io::read_image(ours).unwrap(), raycaster::image_io::read_image(reference).unwrap());
+    a.enumerate_pixels().all(|(x, row, p)| {
+        let q = b.get_pixel(x, row);
+        let off = (0..3).any(|c| p[c].abs_diff(q[c]) > 1);
+        let j = 11 - row as i64;
+        !off || (x as i64 + j - 11).abs() <= 3
+    })
+}
+
+/// The 62 lines as one `batch` (the default backend) in a fresh copy of the folder: every
+/// line renders and writes its files; stderr holds only the GPU's refusals handed to the
+/// reference.
+#[test]
+fn assignment_7_as_one_batch() {
+    let Some(corpus) = common::corpus() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    common::copy_course_folder(&corpus, "a7", dir.path());
+    let out = raycaster_in(dir.path(), &["batch", "commands.txt"]);
+    let said = stderr(&out);
+    assert!(out.status.success(), "{said}");
+    for line in said.lines() {
+        let handed_over =
+            line.contains(": warning: ") && line.ends_with("rendering with the f64 CPU reference instead");
+        assert!(handed_over, "{line}");
+    }
+    for command in common::course_commands(&corpus, "a7") {
+        for flag in ["-output", "-render_samples", "-render_filter"] {
+            if let Some(k) = command.iter().position(|a| a == flag) {
+                assert!(dir.path().join(&command[k + 1]).exists(), "{}: no image", command.join(" "));
+            }
+        }
+    }
+}
+
+/// A render with a filter reaching 3 pixels split into bands (`--tile`) stitches back into
+/// the single render's bytes, TGA and EXR (colour, normals, depth), on both backends: each
+/// band traces the samples of the rows its filter reads beyond it.
+#[test]
+fn tiles_with_filters_stitch_byte_for_byte() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = common::scenes_dir().join("triangles.txt");
+    let scene = scene.to_str().unwrap();
+    for backend in backends() {
+        for ext in ["tga", "exr"] {
+            let (o, n, d) = (format!("o.{ext}"), format!("n.{ext}"), format!("d.{ext}"));
+            let base = [
+                "-input",
+                scene,
+                "-size",
+                "40",
+                "23",
+                "-output",
+                &o,
+                "-normals",
+                &n,
+                "-depth",
+                "5",
+                "15",
+                &d,
+                "-jittered_samples",
+                "4",
+                "-gaussian_filter",
+                "1.7",
+                "--backend",
+                backend,
+                "-q",
+            ];
+            let whole = raycaster_in(dir.path(), &base);
+            assert!(whole.status.success(), "{}", stderr(&whole));
+            let read = |f: &str| std::fs::read(dir.path().join(f)).unwrap();
+            let expected = [read(&o), read(&n), read(&d)];
+            for k in 0..3 {
+                let tile = format!("{k}/3");
+                let mut args = base.to_vec();
+                args.extend(["--tile", &tile]);
+                let part = raycaster_in(dir.path(), &args);
+                assert!(part.status.success(), "{}", stderr(&part));
+            }
+            let stitched =
+                raycaster_in(dir.path(), &["stitch", "-output", &o, "-normals", &n, "-depth", "5", "15", &d]);
+            assert!(stitched.status.success(), "{}", stderr(&stitched));
+            assert!([read(&o), read(&n), read(&d)] == expected, "{backend} {ext}: the stitched bands differ");
+        }
+    }
+}
+
+/// Depth and normals with several samples (docs/SPEC.md §8): where the samples that hit
+/// carry at least half the weight, the filtered normal and t of those samples; the floats
+/// of an EXR are those, on both backends (the GPU within f32's tolerance of the reference).
+#[test]
+fn depth_and_normals_are_filtered_over_the_hits() {
+    let scene = half_plane(0.37, 0.031);
+    let sampling = Sampling { sampler: Sampler::Uniform(9), filter: Filter::Tent(1.5), seed: 0 };
+    let options = RenderOptions { sampling: Some(sampling), ..RenderOptions::all(16, 16) };
+    let reference = raycaster::cpu::render(&scene, &options);
+    // The triangle lies in z = 0, facing the camera at z = 10: every hit at t = 10, normal +z.
+    for k in 0..reference.hit.len() {
+        if reference.hit[k] {
+            assert!((reference.depth[k] - 10.0).abs() < 1e-5, "pixel {k}: t {}", reference.depth[k]);
+            assert!((reference.normal[k][2] - 1.0).abs() < 1e-6, "pixel {k}: {:?}", reference.normal[k]);
+        } else {
+            assert_eq!((reference.depth[k], reference.normal[k]), (0.0, [0.0; 3]));
+        }
+    }
+    // A pixel is a hit exactly where its colour (the white share of the weight) is ≥ ½.
+    for k in 0..reference.hit.len() {
+        assert_eq!(reference.hit[k], reference.color[k][0] >= 0.5 - 1e-6, "pixel {k}: {:?}", reference.color[k]);
+    }
+    let Some(gpu) = common::gpu() else { return };
+    let ours = gpu.render(&scene, &options).unwrap();
+    let errors = raycaster::metrics::compare_frames(&ours, &reference, (5.0, 15.0));
+    for e in &errors {
+        assert!(e.image.off_by_more_than_one == 0 && e.non_finite == 0, "{e:?}");
+    }
+}
