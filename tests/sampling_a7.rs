@@ -462,3 +462,75 @@ fn depth_and_normals_are_filtered_over_the_hits() {
         assert!(e.image.off_by_more_than_one == 0 && e.non_finite == 0, "{e:?}");
     }
 }
+
+/// Sampling with the other features on the GPU: the course's marble cubes (a solid texture,
+/// assignment 6) with jittered samples and a tent, and its faceted gem (shadows, 5 bounces,
+/// a grid) with random samples and a gaussian, each GPU image within the 0.1 % contract of
+/// the reference's; and `-stats` on the reference counts every sample's ray, once.
+#[test]
+fn sampling_with_textures_shadows_bounces_grids_and_stats() {
+    let Some(corpus) = common::corpus() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    common::copy_course_folder(&corpus, "a6", dir.path());
+    common::copy_course_folder(&corpus, "a7", dir.path());
+    let lines: [&[&str]; 2] = [
+        &["-input", "scene6_15_marble_cubes.txt", "-size", "120", "120", "-jittered_samples", "4", "-tent_filter", "1"],
+        &[
+            "-input",
+            "scene7_06_faceted_gem.txt",
+            "-size",
+            "100",
+            "100",
+            "-shadows",
+            "-shade_back",
+            "-bounces",
+            "5",
+            "-weight",
+            "0.01",
+            "-grid",
+            "20",
+            "20",
+            "20",
+            "-random_samples",
+            "5",
+            "-gaussian_filter",
+            "0.6",
+        ],
+    ];
+    for line in lines {
+        if common::gpu().is_none() {
+            break;
+        }
+        for backend in ["cpu", "gpu"] {
+            let file = format!("{backend}.tga");
+            let mut args = line.to_vec();
+            args.extend(["-output", &file, "--backend", backend, "-q"]);
+            let out = raycaster_in(dir.path(), &args);
+            assert!(out.status.success(), "{line:?} {backend}: {}", stderr(&out));
+        }
+        let (off, pixels, max) = diff(&dir.path().join("gpu.tga"), &dir.path().join("cpu.tga"));
+        println!("  {}: GPU against the reference {off} of {pixels} off, max {max}", line[1]);
+        assert!(within(off, pixels), "{line:?}: {off} of {pixels}");
+    }
+    // Primary rays only: W·H·N non-shadow rays, whatever tiles the reference cut the image into.
+    let args = [
+        "-input",
+        "scene7_01_sphere_triangle.txt",
+        "-size",
+        "30",
+        "20",
+        "-output",
+        "s.tga",
+        "-uniform_samples",
+        "9",
+        "-gaussian_filter",
+        "1",
+        "-stats",
+        "--backend",
+        "cpu",
+    ];
+    let out = raycaster_in(dir.path(), &args);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains(&format!("num non-shadow rays        {}", 30 * 20 * 9)), "{stdout}");
+}

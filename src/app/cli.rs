@@ -505,6 +505,46 @@ mod tests {
         assert_eq!(args.backend, BackendChoice::Auto);
     }
 
+    /// docs/SPEC.md §8: the samplers, the filters and their defaults, the seed, the pictures.
+    #[test]
+    fn sampling_flags() {
+        use raycaster::sampling::Filter;
+        assert_eq!(render("-input s -size 9 9 -output o.tga").sampling, None);
+        let args = render("-input s -size 9 9 -output o.tga -jittered_samples 16 --seed 7");
+        assert_eq!(args.sampling, Some(Sampling { sampler: Sampler::Jittered(16), filter: Filter::Box(0.5), seed: 7 }));
+        let args = render("-input s -size 9 9 -output o.tga -gaussian_filter 0.4");
+        assert_eq!(
+            args.sampling,
+            Some(Sampling { sampler: Sampler::Uniform(1), filter: Filter::Gaussian(0.4), seed: 0 })
+        );
+        let args = render("-input s -size 9 9 -render_filter f.tga 20 -tent_filter 1.7");
+        assert_eq!(args.pictures.filter, Some(Picture { path: "f.tga".into(), zoom: 20 }));
+        assert!(args.files.outputs().is_empty());
+        let cases = [
+            (
+                "-uniform_samples 5",
+                "-uniform_samples: 5 is not a square number: the samples lie on a √n×√n grid (try 4 or 9)",
+            ),
+            ("-jittered_samples 8", "-jittered_samples: 8 is not a square number"),
+            ("-random_samples 0", "-random_samples: '0' is not a whole number from 1 to 1024"),
+            ("-box_filter 0", "-box_filter: '0' is not a number > 0"),
+            ("-tent_filter -1", "-tent_filter: '-1' is not a number > 0"),
+            ("-gaussian_filter nan", "-gaussian_filter: 'nan' is not a number > 0"),
+            ("--seed -1", "--seed: '-1' is not a whole number from 0 to 4294967295"),
+            ("-render_samples s.tga 0", "-render_samples: '0' is not a whole number from 1 to 65535"),
+            (
+                "-render_samples s.tga 8000",
+                "-render_samples s.tga 8000: a picture of 72000×72000 pixels is past the limits",
+            ),
+            ("-render_filter f.tga 2 --tile 0/2", "--tile: -render_samples and -render_filter pictures are not split"),
+        ];
+        for (extra, needle) in cases {
+            let line = format!("-input s -size 9 9 -output o.tga {extra}");
+            let err = parse(&line).expect_err(&line);
+            assert!(err.0.contains(needle), "{line}: {err}");
+        }
+    }
+
     #[test]
     fn double_dash_spellings_and_any_order() {
         let a = render("--shade-back --output o.png --size 3 4 --input s.txt --backend cpu");
