@@ -18,33 +18,46 @@ fn loops_were_cut() -> bool {
     return passes != P.loop_canary_trips;
 }
 
-// What a pixel shows, shaded and not yet written.
+// What a pixel shows, shaded and not yet written; `beyond_reach` where a solid texture
+// was blended beyond its reach on the way (shaders/texture.wgsl).
 struct Shaded {
     hit: bool,
     color: vec3<f32>,
     normal: vec3<f32>,
     t: f32,
+    beyond_reach: bool,
 }
 
 fn shade_pixel(ray: Ray, hit: Closest) -> Shaded {
     if (hit.t == NO_HIT) {
-        return Shaded(false, P.background, vec3<f32>(0.0), 0.0);
+        return Shaded(false, P.background, vec3<f32>(0.0), 0.0, false);
     }
     let surface = surface_at(hit, ray);
     var color = vec3<f32>(0.0);
+    if (TEXTURES) {
+        beyond_texture_reach = false;
+        shading_secondary_ray = false;
+    }
     if (WANT_COLOR) {
         color = color_of_tree(surface, ray);
     }
-    return Shaded(true, color, surface.normal, hit.t);
+    return Shaded(true, color, surface.normal, hit.t, TEXTURES && beyond_texture_reach);
 }
 
-// Writes tile-local row `row` of column i, when it belongs to this tile; marked `cut` when
-// the invocation's loops were cut short, for the host to render it again.
+// Writes tile-local row `row` of column i, when it belongs to this tile; handed over to the
+// host's reference when the invocation's loops were cut short (`cut`) or a texture was
+// beyond its reach.
 fn write_row(i: u32, row: i32, shaded: Shaded, cut: bool) {
     if (row < 0 || row >= i32(P.tile_rows)) {
         return;
     }
-    write_pixel(u32(row) * P.width + i, shaded.hit, shaded.color, shaded.normal, shaded.t, cut);
+    var handover = HANDOVER_NONE;
+    if (cut) {
+        handover = HANDOVER_LOOPS;
+    } else if (shaded.beyond_reach) {
+        handover = HANDOVER_REACH;
+    }
+    write_pixel(u32(row) * P.width + i, shaded.hit, shaded.color, shaded.normal, shaded.t, handover);
 }
 
 @compute @workgroup_size(WORKGROUP, WORKGROUP)

@@ -22,7 +22,8 @@ struct FilterSum {
     hit_weight: f32,
     normal: vec3<f32>,
     depth: f32,
-    cut: bool,
+    // The samples' handover flags, or-ed (2 loops cut short, 4 beyond a texture's reach).
+    handover: u32,
 }
 
 fn add_sample(sum: ptr<function, FilterSum>, w: f32, index: u32) {
@@ -31,7 +32,7 @@ fn add_sample(sum: ptr<function, FilterSum>, w: f32, index: u32) {
     let color = vec3<f32>(bitcast<f32>(samples[s + 1u]), bitcast<f32>(samples[s + 2u]), bitcast<f32>(samples[s + 3u]));
     (*sum).weight += w;
     (*sum).color += w * color;
-    (*sum).cut = (*sum).cut || (flags & 2u) != 0u;
+    (*sum).handover |= flags & 6u;
     if ((flags & 1u) != 0u) {
         let normal =
             vec3<f32>(bitcast<f32>(samples[s + 4u]), bitcast<f32>(samples[s + 5u]), bitcast<f32>(samples[s + 6u]));
@@ -53,7 +54,7 @@ fn main_filter(@builtin(global_invocation_id) id: vec3<u32>) {
     let image_row = i32(P.first_row + row);
     let radius = i32(sampling.radius);
     let n = sampling.count;
-    var sum = FilterSum(0.0, vec3<f32>(0.0), 0.0, vec3<f32>(0.0), 0.0, false);
+    var sum = FilterSum(0.0, vec3<f32>(0.0), 0.0, vec3<f32>(0.0), 0.0, 0u);
     for (var dr = -radius; dr <= radius; dr++) {
         let row2 = image_row + dr;
         if (row2 < 0 || row2 >= i32(P.height)) {
@@ -76,8 +77,7 @@ fn main_filter(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     if (sum.weight == 0.0) {
         // No sample weighs: the plain average of the pixel's own.
-        let cut = sum.cut;
-        sum = FilterSum(0.0, vec3<f32>(0.0), 0.0, vec3<f32>(0.0), 0.0, cut);
+        sum = FilterSum(0.0, vec3<f32>(0.0), 0.0, vec3<f32>(0.0), 0.0, sum.handover);
         let first = ((u32(image_row) - sampling.first_row) * P.width + i) * n;
         for (var k = 0u; k < n; k++) {
             add_sample(&sum, 1.0, first + k);
@@ -87,6 +87,12 @@ fn main_filter(@builtin(global_invocation_id) id: vec3<u32>) {
     let per_hit = select(0.0, 1.0 / sum.hit_weight, sum.hit_weight > 0.0);
     let normal = select(vec3<f32>(0.0), sum.normal * per_hit, hit);
     let t = select(0.0, sum.depth * per_hit, hit);
-    let cut = sum.cut || (LOOP_CANARY && loops_were_cut());
-    write_pixel(row * P.width + i, hit, sum.color / sum.weight, normal, t, cut);
+    // A sample the kernel could not finish makes the pixel the reference's.
+    var handover = HANDOVER_NONE;
+    if ((sum.handover & 2u) != 0u || (LOOP_CANARY && loops_were_cut())) {
+        handover = HANDOVER_LOOPS;
+    } else if ((sum.handover & 4u) != 0u) {
+        handover = HANDOVER_REACH;
+    }
+    write_pixel(row * P.width + i, hit, sum.color / sum.weight, normal, t, handover);
 }

@@ -179,7 +179,9 @@ struct Material {
 
 // A material's solid texture (gpu::layout::GpuTexture), kind 0 for a Phong material: the
 // rows of the affine map from camera-relative world space to texture space, the kind
-// (1 Checkerboard, 2 Noise, 3 Marble, 4 Wood), the two materials it blends and its numbers.
+// (1 Checkerboard, 2 Noise, 3 Marble, 4 Wood), the two materials it blends and its numbers;
+// `reach`, the texture coordinates' magnitude up to which f32 blends it faithfully
+// (gpu::texture_range), and `spawns`, 1 where a material it blends reflects or refracts.
 struct Texture {
     row0: vec4<f32>,
     row1: vec4<f32>,
@@ -190,8 +192,8 @@ struct Texture {
     octaves: u32,
     frequency: f32,
     amplitude: f32,
-    _pad0: u32,
-    _pad1: u32,
+    reach: f32,
+    spawns: u32,
 }
 
 // A DirectionalLight or a PointLight (is_point), as gpu::layout::GpuLight.

@@ -24,7 +24,8 @@ struct Sampling {
     _pad2: u32,
 }
 
-// Words of one sample in `samples`: flags (1 hit, 2 cut short), colour, normal, t.
+// Words of one sample in `samples`: flags (1 hit, 2 its loops cut short, 4 a texture
+// blended beyond its reach: the host renders the pixels it reaches again), colour, normal, t.
 const SAMPLE_WORDS: u32 = 8u;
 
 @group(0) @binding(15) var<storage, read_write> samples: array<u32>;
@@ -86,7 +87,7 @@ fn main_samples(@builtin(global_invocation_id) id: vec3<u32>) {
     let shaded = shade_pixel(ray, closest_hit(ray, t_min()));
     let cut = LOOP_CANARY && loops_were_cut();
     let w = ((r * P.width + i) * sampling.count + k) * SAMPLE_WORDS;
-    samples[w] = select(0u, 1u, shaded.hit) | select(0u, 2u, cut);
+    samples[w] = select(0u, 1u, shaded.hit) | select(0u, 2u, cut) | select(0u, 4u, shaded.beyond_reach);
     samples[w + 1u] = bitcast<u32>(shaded.color.x);
     samples[w + 2u] = bitcast<u32>(shaded.color.y);
     samples[w + 3u] = bitcast<u32>(shaded.color.z);

@@ -108,35 +108,61 @@ fn shade_phong(material: Material, surface: Surface, n: vec3<f32>, ray: Ray) -> 
 // slots hold them.
 var<private> blend_material: array<u32, BLEND_STACK>;
 var<private> blend_share: array<f32, BLEND_STACK>;
+var<private> blend_len: u32;
 
-// The texture at the surface's material as the reference blends it (cpu::Reference::
-// shade_material): each Phong material it reaches, through nested textures, shaded and
-// weighted by the product of the shares on its way; a material with no share is not shaded.
-fn shade_blend(surface: Surface, n: vec3<f32>, ray: Ray) -> vec3<f32> {
-    var color = vec3<f32>(0.0);
-    blend_material[0] = surface.material;
+// A Phong material a texture's blend reaches and its share there, the product of the
+// shares on its way; NO_LEAF once the blend has no more.
+struct Leaf {
+    material: u32,
+    share: f32,
+}
+
+const NO_LEAF: u32 = 0xffffffffu;
+
+fn start_blend(material: u32) {
+    blend_material[0] = material;
     blend_share[0] = 1.0;
-    var len = 1u;
-    while (len > 0u) {
-        len -= 1u;
-        let m = blend_material[len];
-        let share = blend_share[len];
+    blend_len = 1u;
+}
+
+// The blend's next Phong material at the camera-relative point p, as the reference walks
+// it (cpu::Reference::shade_material): the first material before the second, and a
+// material with no share not at all.
+fn next_leaf(p: vec3<f32>) -> Leaf {
+    while (blend_len > 0u) {
+        blend_len -= 1u;
+        let m = blend_material[blend_len];
+        let share = blend_share[blend_len];
         let t = textures[m];
         if (t.kind == 0u) {
-            color += share * shade_phong(materials[m], surface, n, ray);
-            continue;
+            return Leaf(m, share);
         }
-        let first = first_material_share(t, surface.point);
+        let first = first_material_share(t, p);
         if (first < 1.0) {
-            blend_material[len] = t.second;
-            blend_share[len] = share * (1.0 - first);
-            len += 1u;
+            blend_material[blend_len] = t.second;
+            blend_share[blend_len] = share * (1.0 - first);
+            blend_len += 1u;
         }
         if (first > 0.0) {
-            blend_material[len] = t.first;
-            blend_share[len] = share * first;
-            len += 1u;
+            blend_material[blend_len] = t.first;
+            blend_share[blend_len] = share * first;
+            blend_len += 1u;
         }
+    }
+    return Leaf(NO_LEAF, 0.0);
+}
+
+// The texture at the surface's material as the reference blends it: each Phong material
+// it reaches, shaded and weighted by its share.
+fn shade_blend(surface: Surface, n: vec3<f32>, ray: Ray) -> vec3<f32> {
+    var color = vec3<f32>(0.0);
+    start_blend(surface.material);
+    loop {
+        let leaf = next_leaf(surface.point);
+        if (leaf.material == NO_LEAF) {
+            break;
+        }
+        color += leaf.share * shade_phong(materials[leaf.material], surface, n, ray);
     }
     return color;
 }

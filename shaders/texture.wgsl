@@ -67,8 +67,33 @@ fn band(phase: f32) -> f32 {
     return (1.0 + sin(phase)) / 2.0;
 }
 
+// Set where a texture was blended at a point beyond its reach (gpu::texture_range): the
+// pixel is marked for the host, which renders it with the reference.
+var<private> beyond_texture_reach: bool;
+// Whether the ray being shaded was reflected or refracted (shaders/tree.wgsl).
+var<private> shading_secondary_ray: bool;
+
+// Q = max_i Σ_j |M_ij|·|p_j| + |t_i|, the magnitude that bounds the rounding of q = M·p
+// (gpu::texture_range's contract), compared with what the texture tolerates. A bounded
+// primitive's points the host checks before the render; a plane's reach the horizon, so
+// every hit is checked here too. A reflected or refracted ray's hit carries the errors of
+// its whole path, which a curved mirror or glass magnifies: a smooth texture's share moves
+// with them continuously, but the checkerboard's parity flips, so the kernel leaves a
+// checkerboard seen that way to the reference (scene6_14 at 100²: 12 of 10 000 pixels more
+// than one level off otherwise).
+fn check_reach(t: Texture, p: vec3<f32>) {
+    let a = abs(p);
+    let q = max(max(dot(abs(t.row0.xyz), a) + abs(t.row0.w), dot(abs(t.row1.xyz), a) + abs(t.row1.w)),
+                dot(abs(t.row2.xyz), a) + abs(t.row2.w));
+    // `!(q <= reach)`: a NaN coordinate is beyond reach too.
+    if (!(q <= t.reach) || (shading_secondary_ray && t.kind == 1u)) {
+        beyond_texture_reach = true;
+    }
+}
+
 // The share of the texture's first material at the camera-relative point p.
 fn first_material_share(t: Texture, p: vec3<f32>) -> f32 {
+    check_reach(t, p);
     let h = vec4<f32>(p, 1.0);
     let q = vec3<f32>(dot(t.row0, h), dot(t.row1, h), dot(t.row2, h));
     switch t.kind {

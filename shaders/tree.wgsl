@@ -1,8 +1,8 @@
 // The ray tree of docs/SPEC.md §5 without recursion, which WGSL does not have: the rays
-// still to trace wait on an explicit stack, depth first. A node pushes at most two
-// children (reflected, refracted) one level deeper and the last pushed is traced next, so
-// at most one sibling waits per level: BOUNCES + 1 slots, which the host keeps within
-// TREE_STACK (gpu::tree). The colour is linear in what each ray sees, so each ray adds its
+// still to trace wait on an explicit stack, depth first. A node pushes its children
+// (reflected and refracted, for each material a solid texture blends) one level deeper and
+// the last pushed is traced next, so at most all but one of a node's children wait per
+// level: the host keeps that within TREE_STACK (gpu::tree::TreeShape::slots). The colour is linear in what each ray sees, so each ray adds its
 // own shading times the product of the colours on its way from the camera, in whatever
 // order the stack hands it out.
 
@@ -41,14 +41,15 @@ fn pop_pending() -> Pending {
     return Pending(Ray(o.xyz, d.xyz), t.xyz, o.w, d.w, bitcast<u32>(t.w));
 }
 
-// Queues a ray whose colour counts `tint` times: not at all where the tint is black or
-// the weight it would carry falls below -weight.
-fn push_ray(ray: Ray, tint: vec3<f32>, parent: Pending, index: f32) {
+// Queues a ray whose colour counts `share` · `tint` times: not at all where the tint is
+// black or the weight it would carry falls below -weight. The weight leaves the share out,
+// as the reference's path weight does (a texture's materials each spawn their own rays).
+fn push_ray(ray: Ray, tint: vec3<f32>, share: f32, parent: Pending, index: f32) {
     let weight = parent.weight * length(tint);
     if (all(tint == vec3<f32>(0.0)) || weight < P.weight) {
         return;
     }
-    push_pending(Pending(ray, parent.throughput * tint, weight, index, parent.bounces + 1u));
+    push_pending(Pending(ray, parent.throughput * (share * tint), weight, index, parent.bounces + 1u));
 }
 
 // The direction of the unit ray d refracted at a surface whose unit normal n faces it, from
@@ -65,23 +66,43 @@ fn refraction(d: vec3<f32>, n: vec3<f32>, index_from: f32, index_to: f32) -> vec
 }
 
 // The reflected and refracted rays of the surface `node.ray` hit, while the tree may go
-// deeper. Objects sit in vacuum (GRAMMAR.md A4): a ray entering a surface (ray·N < 0) goes
-// from index 1 into the material's, one leaving it back to 1.
+// deeper: its material's, or those of each material a solid texture blends there, by
+// its share (docs/SPEC.md §5).
 fn push_children(surface: Surface, node: Pending) {
     if (node.bounces >= BOUNCES || is_black(surface, node.ray)) {
         return;
     }
+    if (TEXTURES && textures[surface.material].kind != 0u) {
+        if (textures[surface.material].spawns == 0u) {
+            return;
+        }
+        start_blend(surface.material);
+        loop {
+            let leaf = next_leaf(surface.point);
+            if (leaf.material == NO_LEAF) {
+                break;
+            }
+            push_material_children(surface, node, materials[leaf.material], leaf.share);
+        }
+        return;
+    }
+    push_material_children(surface, node, materials[surface.material], 1.0);
+}
+
+// The rays one Phong material spawns where `node.ray` hit. Objects sit in vacuum
+// (GRAMMAR.md A4): a ray entering a surface (ray·N < 0) goes from index 1 into the
+// material's, one leaving it back to 1.
+fn push_material_children(surface: Surface, node: Pending, material: Material, share: f32) {
     let n = facing_normal(surface, node.ray);
-    let material = materials[surface.material];
     let d = node.ray.direction;
     let index_to = select(1.0, material.index_of_refraction, dot(d, surface.normal) < 0.0);
     // Refraction first, so that reflection, which the reference adds first, is traced first.
     let refracted = refraction(d, n, node.index, index_to);
     if (refracted.w != 0.0) {
-        push_ray(Ray(spawn_origin(surface, -n, refracted.xyz), refracted.xyz), material.transparent, node, index_to);
+        push_ray(Ray(spawn_origin(surface, -n, refracted.xyz), refracted.xyz), material.transparent, share, node, index_to);
     }
     let reflected = d - 2.0 * dot(d, n) * n;
-    push_ray(Ray(spawn_origin(surface, n, reflected), reflected), material.reflective, node, node.index);
+    push_ray(Ray(spawn_origin(surface, n, reflected), reflected), material.reflective, share, node, node.index);
 }
 
 // The colour seen along a primary ray that hit `surface`: its own shading, then every ray of
@@ -101,6 +122,9 @@ fn color_of_tree(surface: Surface, ray: Ray) -> vec3<f32> {
             continue;
         }
         let next = surface_at(hit, node.ray);
+        if (TEXTURES) {
+            shading_secondary_ray = true;
+        }
         color += node.throughput * shade(next, node.ray);
         push_children(next, node);
     }

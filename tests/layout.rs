@@ -148,6 +148,8 @@ fn host_structs_match_the_shader() {
             ("octaves", offset_of!(GpuTexture, octaves)),
             ("frequency", offset_of!(GpuTexture, frequency)),
             ("amplitude", offset_of!(GpuTexture, amplitude)),
+            ("reach", offset_of!(GpuTexture, reach)),
+            ("spawns", offset_of!(GpuTexture, spawns)),
         ],
     );
     check(

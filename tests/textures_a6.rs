@@ -10,9 +10,10 @@
 //!   copy of `a6/`, under the course-image contract; the wood image `output6_16` ("no right
 //!   answer") is only compared and printed;
 //! - the GPU kernel's f32 textures against the same answers and against the reference,
-//!   under the 0.1 % contract, and its refusals: texture coordinates just outside its
-//!   precision contract (and not just inside), a plane in perspective, and a texture that
-//!   blends a reflective material under `-bounces`.
+//!   under the 0.1 % contract: its refusal of texture coordinates just outside its
+//!   precision contract (and not just inside); the far pixels of a plane seen to the
+//!   horizon, handed to the reference, exactly those whose texture coordinates the test
+//!   finds beyond reach; and a texture that blends a mirror and glass under `-bounces`.
 
 mod common;
 
@@ -180,7 +181,11 @@ fn course_marble_and_wood_on_the_gpu_match_the_reference() {
 /// reaches (1, 1, 11), so Q = 11·scale + 10·scale = 21·scale; the rate is 32 per octave, and
 /// Q · rate ≤ 2¹⁴ holds up to scale = 16384 / 672 = 24.38095….
 fn noise_sphere(scale: f64) -> raycaster::scene::Scene {
-    let text = format!(
+    parse_scene(&noise_sphere_text(scale), Path::new("noise.txt")).unwrap()
+}
+
+fn noise_sphere_text(scale: f64) -> String {
+    format!(
         "OrthographicCamera {{ center 0 0 10 direction 0 0 -1 up 0 1 0 size 3 }}
 Lights {{ numLights 1 DirectionalLight {{ direction -0.3 -0.5 -1 color 0.9 0.9 0.9 }} }}
 Background {{ ambientLight 0.1 0.1 0.1 }}
@@ -190,8 +195,7 @@ Materials {{ numMaterials 3
   Noise {{ Transform {{ UniformScale {scale} }} materialIndex 0 materialIndex 1 octaves 1 }}
 }}
 Group {{ numObjects 1 MaterialIndex 2 Sphere {{ center 0 0 0 radius 1 }} }}"
-    );
-    parse_scene(&text, Path::new("noise.txt")).unwrap()
+    )
 }
 
 #[test]
@@ -214,32 +218,125 @@ fn gpu_texture_precision_contract_just_inside_and_just_outside() {
     assert!(outside.reference_renders_it(), "auto falls back to the reference");
 }
 
-#[test]
-fn gpu_refuses_a_plane_in_perspective_and_a_texture_of_mirrors() {
-    let Some(gpu) = common::gpu() else { return };
-    let perspective = CHECKER_SCENE.replace(
+/// [`CHECKER_SCENE`]'s plane seen at a grazing angle by a perspective camera one unit
+/// above it, the horizon in view: its far hits lie beyond the checkerboard's reach.
+fn grazing_checker() -> raycaster::scene::Scene {
+    let text = CHECKER_SCENE.replace(
         "OrthographicCamera { center 0 0 10 direction 0 0 -1 up 0 1 0 size 5 }",
-        "PerspectiveCamera { center 0 0 10 direction 0 0 -1 up 0 1 0 angle 30 }",
+        "PerspectiveCamera { center 0 0 1.37 direction 0 1 -0.2 up 0 0 1 angle 30 }",
     );
-    let scene = parse_scene(&perspective, Path::new("checker.txt")).unwrap();
-    let refused = gpu.render(&scene, &RenderOptions::all(8, 8)).map(|_| ()).unwrap_err();
-    let raycaster::gpu::GpuError::Precision(e) = &refused else { panic!("{refused}") };
-    // A plane seen in perspective reaches the horizon: its texture points have no bound.
-    assert_eq!((e.location, e.magnitude), (Some(Location { line: 7, col: 3 }), f64::INFINITY), "{e}");
+    parse_scene(&text, Path::new("checker.txt")).unwrap()
+}
 
-    let mirrors =
-        CHECKER_SCENE.replace("Material { diffuseColor 0 0.5 1 }", "Material { reflectiveColor 0.5 0.5 0.5 }");
-    let scene = parse_scene(&mirrors, Path::new("checker.txt")).unwrap();
-    let options = RenderOptions::all(8, 8);
+/// The pixels (frame order, top row first) whose hit on [`grazing_checker`]'s plane has
+/// texture coordinates of magnitude `Q` (gpu::texture_range's `max_i Σ_j |M_ij||p_j| +
+/// |t_i|`, p relative to the camera) beyond the checkerboard's reach, 2¹⁴ / 32 = 512,
+/// worked out here in f64; and those within 10⁻⁴ of it either way, where f32's Q may
+/// fall on the other side.
+fn beyond_checker_reach(scene: &raycaster::scene::Scene, options: &RenderOptions) -> (Vec<usize>, Vec<usize>) {
+    let rays = raycaster::camera::PrimaryRays::for_camera(&scene.camera, options.width, options.height);
+    let to_texture = DMat4::from_scale(DVec3::splat(1.7))
+        * DMat4::from_rotation_z(30f64.to_radians())
+        * DMat4::from_rotation_x(25f64.to_radians())
+        * DMat4::from_translation(DVec3::new(0.3, 0.2, 0.0));
+    let map = to_texture * DMat4::from_translation(scene.camera.center);
+    let (w, h) = (options.width as usize, options.height as usize);
+    let (mut beyond, mut borderline) = (Vec::new(), Vec::new());
+    for k in 0..w * h {
+        let ray = rays.ray((k % w) as u32, (h - 1 - k / w) as u32);
+        // The plane z = 0.37, from a camera at z = 1.37.
+        let t = (0.37 - ray.origin.z) / ray.direction.z;
+        if t.is_nan() || t <= 0.0 {
+            continue; // above the horizon: the background
+        }
+        let p = ray.at(t) - scene.camera.center;
+        let q = (0..3).map(|i| map.row(i).truncate().abs().dot(p.abs()) + map.row(i).w.abs()).fold(0.0, f64::max);
+        if (q / 512.0 - 1.0).abs() < 1e-4 {
+            borderline.push(k);
+        } else if q > 512.0 {
+            beyond.push(k);
+        }
+    }
+    (beyond, borderline)
+}
+
+#[test]
+fn a_plane_seen_to_the_horizon_hands_its_far_pixels_to_the_reference() {
+    let Some(gpu) = common::gpu() else { return };
+    let scene = grazing_checker();
+    let options = RenderOptions::all(96, 160);
+    let (beyond, borderline) = beyond_checker_reach(&scene, &options);
+    assert!(beyond.len() > 20, "the view reaches past the checkerboard's reach: {}", beyond.len());
+    let (frame, stats) = common::render_gpu_tiles(gpu, &scene, &options);
+    let handed = stats.pixels_beyond_reach as usize;
+    println!("{handed} pixels handed over; {} beyond reach in f64, {} borderline", beyond.len(), borderline.len());
+    assert!(
+        handed >= beyond.len() && handed <= beyond.len() + borderline.len(),
+        "the kernel hands over exactly the pixels beyond reach: {handed}, expected {} (+ up to {} borderline)",
+        beyond.len(),
+        borderline.len()
+    );
+    let reference = raycaster::cpu::render(&scene, &options);
+    for k in &beyond {
+        assert_eq!(frame.color[*k], reference.color[*k], "pixel {k}, handed over, is the reference's");
+    }
+    let errors = raycaster::metrics::compare_frames(&frame, &reference, (0.0, 100.0));
+    for e in &errors {
+        assert_eq!(e.hit_mismatches, 0, "{:?}", e.output);
+        assert!(e.image.off_by_more_than_one * 1000 <= options.pixel_count(), "{:?}: {e:?}", e.output);
+    }
+}
+
+/// A checkerboard of a diffuse material and a mirror with a little glass in it, under a
+/// red sphere the mirror cells reflect, and a sphere of noise blending glass and a mirror:
+/// a texture's materials each spawn their own rays, weighted by their share.
+const MIRROR_TEXTURES: &str = "
+OrthographicCamera { center 0 -6 6 direction 0 1 -1 up 0 0 1 size 6 }
+Lights { numLights 1 DirectionalLight { direction -0.3 0.4 -1 color 0.8 0.8 0.8 } }
+Background { color 0.1 0.2 0.3 ambientLight 0.2 0.2 0.2 }
+Materials { numMaterials 6
+  Material { diffuseColor 0.75 0.75 0.7 }
+  PhongMaterial { diffuseColor 0.1 0.1 0.2 reflectiveColor 0.6 0.6 0.6 transparentColor 0.2 0.2 0.2 indexOfRefraction 1.3 }
+  Checkerboard { Transform { UniformScale 0.8 Translate 0.1 0.2 0.5 } materialIndex 0 materialIndex 1 }
+  Material { diffuseColor 0.9 0.1 0.1 }
+  PhongMaterial { diffuseColor 0.05 0.05 0.05 transparentColor 0.8 0.8 0.8 indexOfRefraction 1.5 }
+  Noise { Transform { UniformScale 2 } materialIndex 4 materialIndex 1 octaves 3 }
+}
+Group { numObjects 3
+  MaterialIndex 2 Plane { normal 0 0 1 offset 0 }
+  MaterialIndex 3 Sphere { center -1 1.5 1.2 radius 1 }
+  MaterialIndex 5 Sphere { center 1.3 -0.5 1 radius 1 }
+}
+";
+
+#[test]
+fn a_texture_of_mirrors_and_glass_traces_each_materials_rays() {
+    let Some(gpu) = common::gpu() else { return };
+    let scene = parse_scene(MIRROR_TEXTURES, Path::new("mirrors.txt")).unwrap();
+    let options = RenderOptions::all(120, 120);
     let mut bounces = options;
-    bounces.shading.bounces = 1;
-    let refused = gpu.render(&scene, &bounces).map(|_| ()).unwrap_err();
-    let raycaster::gpu::GpuError::Unsupported(e) = &refused else { panic!("{refused}") };
-    assert_eq!(e.location, Some(Location { line: 7, col: 3 }), "{e}");
-    assert!(e.to_string().contains("material 2, a Checkerboard solid texture, blends material 1"), "{e}");
-    assert!(refused.reference_renders_it());
-    // Without bounces the mirror's rays are not traced anyway: rendered.
-    gpu.render(&scene, &options).expect("no rays to leave out");
+    bounces.shading.bounces = 3;
+    bounces.shading.shadows = true;
+    let reference = raycaster::cpu::render(&scene, &bounces);
+    let flat = raycaster::cpu::render(
+        &scene,
+        &RenderOptions { shading: raycaster::render::Shading { bounces: 0, ..bounces.shading }, ..options },
+    );
+    let level = |v: f32| (255.0 * v.clamp(0.0, 1.0)).floor() as i32;
+    let differs = |a: &[f32; 3], b: &[f32; 3]| (0..3).any(|c| (level(a[c]) - level(b[c])).abs() > 1);
+    // The test means something: the rays change much of the image.
+    let changed = (0..reference.color.len()).filter(|&k| differs(&reference.color[k], &flat.color[k])).count();
+    assert!(changed > 3000, "reflections and refractions show in {changed} pixels");
+    let (frame, stats) = common::render_gpu_tiles(gpu, &scene, &bounces);
+    let off = (0..frame.color.len()).filter(|&k| differs(&frame.color[k], &reference.color[k])).count();
+    println!("{off} pixels more than one level off; {} handed over", stats.pixels_beyond_reach);
+    assert!(off * 1000 <= options.pixel_count(), "{off} pixels off the reference");
+    // The floor's checkerboard seen in the mirror and the glass goes to the reference;
+    // the noise sphere's own hits, and the floor seen directly, do not.
+    assert!(
+        stats.pixels_beyond_reach > 0 && (stats.pixels_beyond_reach as usize) < options.pixel_count() / 2,
+        "{stats:?}"
+    );
 }
 
 #[test]
@@ -250,24 +347,28 @@ fn the_kernels_permutation_is_the_references() {
 
 #[test]
 fn gpu_backend_exits_1_and_auto_falls_back_with_one_warning() {
-    let Some(corpus) = common::corpus() else { return };
     if common::gpu().is_none() {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
-    common::copy_course_folder(&corpus, "a6", dir.path());
-    // Without -shadows, and large enough (1.1 M pixels × 2 primitives) that `auto` opens
-    // the GPU rather than hand so small a job to the reference at once.
+    let scene = dir.path().join("noise.txt");
+    // A second, plain sphere behind: large enough (1.1 M pixels × 2 primitives) that `auto`
+    // opens the GPU rather than hand so small a job to the reference at once.
+    let text = noise_sphere_text(24.39).replace(
+        "Group { numObjects 1 MaterialIndex 2 Sphere { center 0 0 0 radius 1 } }",
+        "Group { numObjects 2 MaterialIndex 2 Sphere { center 0 0 0 radius 1 }\n  MaterialIndex 0 Sphere { center 0 0 -5 radius 2 } }",
+    );
+    assert_ne!(text, noise_sphere_text(24.39));
+    std::fs::write(&scene, text).unwrap();
     let run = |backend: &str| {
-        let args = ["-input", "scene6_13_checkerboard.txt", "-size", "1100", "1000", "-output", "o.tga"];
-        common::bin::raycaster_in(dir.path(), &[&args[..], &["--backend", backend]].concat())
+        let args = ["-input", "noise.txt", "-size", "1100", "1000", "-output", "o.tga", "--backend", backend];
+        common::bin::raycaster_in(dir.path(), &args)
     };
     let gpu = run("gpu");
     let stderr = String::from_utf8_lossy(&gpu.stderr);
     assert_eq!(gpu.status.code(), Some(1), "{stderr}");
-    // scene6_13's plane, seen in perspective, wears material 5, the `Checkerboard` on line
-    // 50, column 5: its texture points reach the horizon.
-    assert!(stderr.contains("scene6_13_checkerboard.txt:50:5: the texture coordinates of material 5"), "{stderr}");
+    assert!(stderr.contains("noise.txt:7:3: the texture coordinates of material 2"), "{stderr}");
+    assert!(!dir.path().join("o.tga").exists(), "no image from a refused render");
     let auto = run("auto");
     let stderr = String::from_utf8_lossy(&auto.stderr);
     assert!(auto.status.success(), "{stderr}");

@@ -144,6 +144,13 @@ impl Report {
                     stats.pixels_cut_short
                 ));
             }
+            if stats.pixels_beyond_reach > 0 {
+                lines.push(format!(
+                    "texture reach: {} pixels see a solid texture beyond the f32 kernel's reach (far \
+                     away, or a checkerboard by a reflected or refracted ray); the reference rendered them",
+                    stats.pixels_beyond_reach
+                ));
+            }
         }
         time += &format!(", writing {:.1} ms", self.write_ms);
         lines.push(time);

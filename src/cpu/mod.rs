@@ -105,22 +105,28 @@ impl<'a> Reference<'a> {
     /// pixel filters its own and its neighbours' samples (traced for it alone).
     fn render_pixels(&self, pixels: &[(u32, u32)]) -> Vec<Pixel> {
         if let Some(sampling) = self.options.sampling {
-            return pixels
-                .par_iter()
-                .map(|&(i, row)| {
-                    let (r, height) = (sampling.radius(), self.options.height);
-                    let top = row.saturating_sub(r);
-                    let bottom = (row + 1).saturating_add(r).min(height);
-                    let (left, right) = (i.saturating_sub(r), (i + 1).saturating_add(r).min(self.options.width));
-                    let mut stats = RayStats::default();
-                    let samples: Vec<Vec<((f64, f64), Pixel)>> = (top..bottom)
-                        .flat_map(|row2| (left..right).map(move |i2| (i2, row2)))
-                        .map(|(i2, row2)| self.samples(&sampling, i2, height - 1 - row2, &mut stats))
-                        .collect();
-                    let at = |i2: u32, row2: u32| &samples[((row2 - top) * (right - left) + i2 - left) as usize][..];
-                    self.filtered_pixel(&sampling, i, row, at)
+            // Every pixel whose samples a listed pixel's filter reads, traced once.
+            let (r, width, height) = (sampling.radius(), self.options.width, self.options.height);
+            let mut needed: Vec<(u32, u32)> = pixels
+                .iter()
+                .flat_map(|&(i, row)| {
+                    let rows = row.saturating_sub(r)..(row + 1).saturating_add(r).min(height);
+                    rows.flat_map(move |row2| {
+                        (i.saturating_sub(r)..(i + 1).saturating_add(r).min(width)).map(move |i2| (i2, row2))
+                    })
                 })
                 .collect();
+            needed.sort_unstable();
+            needed.dedup();
+            let traced: Vec<Vec<((f64, f64), Pixel)>> = needed
+                .par_iter()
+                .map(|&(i2, row2)| self.samples(&sampling, i2, height - 1 - row2, &mut RayStats::default()))
+                .collect();
+            let at = |i2: u32, row2: u32| {
+                let k = needed.binary_search(&(i2, row2)).expect("every neighbour was traced");
+                &traced[k][..]
+            };
+            return pixels.par_iter().map(|&(i, row)| self.filtered_pixel(&sampling, i, row, at)).collect();
         }
         pixels
             .par_iter()

@@ -102,8 +102,9 @@ impl SceneBuffers {
         }
         buffers.materials = scene.materials.iter().map(GpuMaterial::new).collect();
         if scene.has_textures() {
-            buffers.textures =
-                (0..scene.materials.len() as u32).map(|k| GpuTexture::new(scene.texture(k), rays.center)).collect();
+            buffers.textures = (0..scene.materials.len() as u32)
+                .map(|k| GpuTexture::new(scene.texture(k), rays.center, super::tree::branching(scene, k) > 0))
+                .collect();
         }
         buffers.lights = scene.lights.iter().map(|light| GpuLight::new(light, rays.center)).collect();
         buffers.params = Params {

@@ -178,13 +178,17 @@ pub struct GpuTexture {
     pub octaves: u32,
     pub frequency: f32,
     pub amplitude: f32,
-    pub _pad0: u32,
-    pub _pad1: u32,
+    /// The texture coordinates' magnitude `Q` up to which f32 blends it faithfully
+    /// ([`super::texture_range::reach`]); a hit beyond it is handed over.
+    pub reach: f32,
+    /// 1 where a material it blends reflects or refracts: its hits spawn rays.
+    pub spawns: u32,
 }
 
 impl GpuTexture {
-    /// Material `texture`'s entry (zeros for a Phong material) for a camera at `camera`.
-    pub fn new(texture: Option<&crate::scene::Texture>, camera: glam::DVec3) -> GpuTexture {
+    /// Material `texture`'s entry (zeros for a Phong material) for a camera at `camera`;
+    /// `spawns`: whether a material it blends reflects or refracts.
+    pub fn new(texture: Option<&crate::scene::Texture>, camera: glam::DVec3, spawns: bool) -> GpuTexture {
         use crate::scene::TextureKind;
         let Some(texture) = texture else { return GpuTexture::default() };
         let map = texture.to_texture * glam::DMat4::from_translation(camera);
@@ -204,7 +208,8 @@ impl GpuTexture {
             octaves: texture.octaves,
             frequency: texture.frequency as f32,
             amplitude: texture.amplitude as f32,
-            ..Default::default()
+            reach: super::texture_range::reach(texture) as f32,
+            spawns: spawns as u32,
         }
     }
 }
@@ -264,9 +269,11 @@ impl GpuLight {
 /// colour and `|N|` quantised by the kernel (`r | g << 8 | b << 16`), the depth as the f32
 /// bits of `t` (all ones where nothing was hit), which the host quantises in f64.
 ///
-/// A pixel whose loops the driver cut short (`LOOP_CANARY`) is marked: its hit word is
-/// [`CUT_SHORT_HIT`], or its first packed word is [`CUT_SHORT_WORD`]. The host renders it
-/// again with the reference ([`PixelLayout::encode`]) before anyone reads it.
+/// A pixel the kernel hands over is marked ([`Handover`]): whose loops the driver cut short
+/// (`LOOP_CANARY`), its hit word [`CUT_SHORT_HIT`] or its first packed word
+/// [`CUT_SHORT_WORD`]; where a solid texture was blended beyond its reach
+/// ([`super::texture_range`]), [`BEYOND_REACH_HIT`] or [`BEYOND_REACH_WORD`]. The host
+/// renders it again with the reference ([`PixelLayout::encode`]) before anyone reads it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct PixelLayout {
     pub outputs: Outputs,
@@ -318,16 +325,31 @@ pub const CUT_SHORT_HIT: u32 = 2;
 /// where it stands for a depth, which no t is. The pixel's other words are not read.
 pub const CUT_SHORT_WORD: u32 = 0xffff_fffe;
 
+/// The hit word of a float pixel where a texture was blended beyond its reach.
+pub const BEYOND_REACH_HIT: u32 = 3;
+/// The first packed word of a pixel where a texture was blended beyond its reach, chosen
+/// as [`CUT_SHORT_WORD`] is (another NaN).
+pub const BEYOND_REACH_WORD: u32 = 0xffff_fffd;
+
 /// What a packed depth word holds where the ray hit nothing (a NaN no kernel computes).
 pub const PACKED_MISS: u32 = u32::MAX;
 
+/// Why the kernel left a pixel for the host's reference to render.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Handover {
+    /// The driver cut the invocation's loops short (docs/lavapipe.md).
+    LoopsCut,
+    /// A solid texture was blended where f32 does not place its points faithfully.
+    BeyondReach,
+}
+
 impl PixelLayout {
-    /// Whether the kernel marked the pixel whose words are `words` as cut short.
-    pub fn cut_short(&self, words: &[u32]) -> bool {
-        if self.packed {
-            words[0] == CUT_SHORT_WORD
-        } else {
-            words[0] == CUT_SHORT_HIT
+    /// Whether, and why, the kernel handed over the pixel whose words are `words`.
+    pub fn handover(&self, words: &[u32]) -> Option<Handover> {
+        match (self.packed, words[0]) {
+            (true, CUT_SHORT_WORD) | (false, CUT_SHORT_HIT) => Some(Handover::LoopsCut),
+            (true, BEYOND_REACH_WORD) | (false, BEYOND_REACH_HIT) => Some(Handover::BeyondReach),
+            _ => None,
         }
     }
 

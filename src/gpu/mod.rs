@@ -345,6 +345,9 @@ pub struct RenderStats {
     /// Pixels whose loops the driver cut short ([`GpuRenderer::loop_limit`]), which the
     /// reference rendered instead.
     pub pixels_cut_short: u64,
+    /// Pixels where a solid texture was blended beyond its reach
+    /// ([`texture_range`]), which the reference rendered instead.
+    pub pixels_beyond_reach: u64,
     /// Time to flatten the scene into buffers (BVH build included) and upload them.
     pub prepare_ms: f64,
     /// Bytes of scene data uploaded (primitives, materials, lights, hierarchy, bins).

@@ -149,7 +149,7 @@ pub fn check(scene: &Scene, options: &RenderOptions) -> Result<(), PrecisionErro
     };
     let triangles = checker.triangles.get();
     if resolution <= if triangles { MAX_RESOLUTION_TRIANGLES } else { MAX_RESOLUTION_SMOOTH } {
-        return super::texture_range::check(scene, options);
+        return super::texture_range::check(scene);
     }
     let what = if rays.orthographic { "OrthographicCamera size" } else { "PerspectiveCamera angle" };
     Err(PrecisionError {

@@ -6,7 +6,7 @@
 //! (decoding, quantising, writing files) overlaps the device's instead of following it.
 
 use super::flatten::SceneBuffers;
-use super::layout::{GpuSampling, Params, PixelLayout, PACKED_MISS, PERLIN_PERMUTATION, SAMPLE_WORDS};
+use super::layout::{GpuSampling, Handover, Params, PixelLayout, PACKED_MISS, PERLIN_PERMUTATION, SAMPLE_WORDS};
 use super::{
     GpuError, GpuRenderer, KernelConfig, RenderStats, Stage, Timer, BINDINGS, MAX_SAMPLE_BYTES, OUTPUT_BINDING,
     SAMPLES_BINDING, SAMPLING_BINDING, WORKGROUP,
@@ -29,8 +29,9 @@ pub struct PreparedScene<'a> {
     tile_rows: u32,
     slots: Vec<Slot>,
     stats: RenderStats,
-    /// The scene, kept where the kernel may mark pixels its driver cut short
-    /// ([`KernelConfig::loop_canary`]), to render those with the reference.
+    /// The scene, kept where the kernel may hand pixels over (its driver cut them short,
+    /// [`KernelConfig::loop_canary`], or a texture was beyond its reach there,
+    /// [`super::texture_range`]), to render those with the reference.
     fallback: Option<Scene>,
     /// With sampling: the passes that trace the samples and filter them.
     sampled: Option<Sampled>,
@@ -108,7 +109,7 @@ impl<'a> PreparedScene<'a> {
                         file: scene.path.clone(),
                         location: None,
                         what: format!(
-                            "{} {} at {} pixels across: one row of samples and the filter's {overlap} rows                              around it exceed the adapter's storage binding limit of {budget} bytes",
+                            "{} {} at {} pixels across: one row of samples and the filter's {overlap} rows around it exceed the adapter's storage binding limit of {budget} bytes",
                             sampling.sampler.flag(),
                             sampling.count(),
                             options.width
@@ -148,10 +149,11 @@ impl<'a> PreparedScene<'a> {
                 scene_bytes,
                 acceleration: buffers.acceleration(),
                 pixels_cut_short: 0,
+                pixels_beyond_reach: 0,
                 counted: None,
                 grid_bounds: None,
             },
-            fallback: config.loop_canary.then(|| scene.clone()),
+            fallback: (config.loop_canary || config.textures).then(|| scene.clone()),
             sampled,
         })
     }
@@ -193,7 +195,9 @@ impl<'a> PreparedScene<'a> {
             for _ in &tiles {
                 let (slot, first_row, rows, kernel_ns) =
                     ready_rx.recv().map_err(|e| GpuError::Readback(e.to_string()))??;
-                stats.pixels_cut_short += self.hand_over(slot, first_row, rows, &mut on_tile)?;
+                let handed = self.hand_over(slot, first_row, rows, &mut on_tile)?;
+                stats.pixels_cut_short += handed.loops_cut;
+                stats.pixels_beyond_reach += handed.beyond_reach;
                 stats.kernel_ns = stats.kernel_ns.zip(kernel_ns).map(|(a, b)| a + b);
                 stats.tiles += 1;
                 // The submitter may already have finished; then nobody needs the slot back.
@@ -203,24 +207,24 @@ impl<'a> PreparedScene<'a> {
         })
     }
 
-    /// Shows the caller the mapped tile, its pixels cut short rendered again by the
-    /// reference, then gives the buffer back to the device; returns how many were.
+    /// Shows the caller the mapped tile, its pixels handed over rendered again by the
+    /// reference, then gives the buffer back to the device; returns how many were, by why.
     fn hand_over<E: From<GpuError>>(
         &self,
         slot: usize,
         first_row: u32,
         rows: u32,
         on_tile: &mut impl FnMut(&ReadTile) -> Result<(), E>,
-    ) -> Result<u64, E> {
+    ) -> Result<HandedOver, E> {
         let readback = &self.slots[slot].readback;
         let range = readback.slice(..self.tile_bytes(rows));
-        let mut rerendered = 0;
+        let mut handed = HandedOver::default();
         let result = {
             let view = range.get_mapped_range().map_err(|e| GpuError::Readback(e.to_string()))?;
             let mapped: &[u32] = bytemuck::cast_slice(&view);
-            let patched = self.fallback.as_ref().and_then(|scene| self.rerender_cut_short(scene, first_row, mapped));
-            if let Some((_, count)) = &patched {
-                rerendered = *count;
+            let patched = self.fallback.as_ref().and_then(|scene| self.rerender_handed_over(scene, first_row, mapped));
+            if let Some((_, counts)) = &patched {
+                handed = *counts;
             }
             let words = patched.as_ref().map_or(mapped, |(words, _)| &words[..]);
             on_tile(&ReadTile {
@@ -233,27 +237,39 @@ impl<'a> PreparedScene<'a> {
             })
         };
         readback.unmap();
-        result.map(|()| rerendered)
+        result.map(|()| handed)
     }
 
-    /// The tile's words with every pixel the kernel marked as cut short replaced by the
+    /// The tile's words with every pixel the kernel handed over replaced by the
     /// reference's, and how many those were; `None` when none was.
-    fn rerender_cut_short(&self, scene: &Scene, first_row: u32, words: &[u32]) -> Option<(Vec<u32>, u64)> {
+    fn rerender_handed_over(&self, scene: &Scene, first_row: u32, words: &[u32]) -> Option<(Vec<u32>, HandedOver)> {
         let stride = self.layout.words() as usize;
         let width = self.options.width as usize;
-        let cut: Vec<usize> =
-            (0..words.len() / stride).filter(|&k| self.layout.cut_short(&words[k * stride..])).collect();
-        if cut.is_empty() {
+        let mut handed = HandedOver::default();
+        let marked: Vec<usize> = (0..words.len() / stride)
+            .filter(|&k| match self.layout.handover(&words[k * stride..]) {
+                Some(Handover::LoopsCut) => {
+                    handed.loops_cut += 1;
+                    true
+                }
+                Some(Handover::BeyondReach) => {
+                    handed.beyond_reach += 1;
+                    true
+                }
+                None => false,
+            })
+            .collect();
+        if marked.is_empty() {
             return None;
         }
         let pixels: Vec<(u32, u32)> =
-            cut.iter().map(|&k| ((k % width) as u32, first_row + (k / width) as u32)).collect();
+            marked.iter().map(|&k| ((k % width) as u32, first_row + (k / width) as u32)).collect();
         let reference = crate::cpu::Reference::new(scene, &self.options).pixels(&pixels);
         let mut out = words.to_vec();
-        for (n, &k) in cut.iter().enumerate() {
+        for (n, &k) in marked.iter().enumerate() {
             self.layout.encode(&reference.pixel(n), &mut out[k * stride..(k + 1) * stride]);
         }
-        Some((out, cut.len() as u64))
+        Some((out, handed))
     }
 
     fn tile_bytes(&self, rows: u32) -> u64 {
@@ -493,4 +509,11 @@ fn rgb_of(words: impl Iterator<Item = u32>) -> Vec<u8> {
         out.extend_from_slice(&w.to_le_bytes()[..3]);
     }
     out
+}
+
+/// Pixels of a tile the reference rendered for the kernel, by why ([`Handover`]).
+#[derive(Clone, Copy, Debug, Default)]
+struct HandedOver {
+    loops_cut: u64,
+    beyond_reach: u64,
 }

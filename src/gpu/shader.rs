@@ -65,6 +65,12 @@ pub fn host_constants() -> String {
         ("TREE_STACK", super::tree::TREE_STACK, "rays waiting in a ray tree (gpu::tree::TREE_STACK)"),
         ("CUT_SHORT_HIT", super::layout::CUT_SHORT_HIT, "hit word of a pixel cut short (gpu::layout)"),
         ("CUT_SHORT_WORD", super::layout::CUT_SHORT_WORD, "first packed word of a pixel cut short (gpu::layout)"),
+        ("BEYOND_REACH_HIT", super::layout::BEYOND_REACH_HIT, "hit word of a pixel beyond a texture's reach"),
+        (
+            "BEYOND_REACH_WORD",
+            super::layout::BEYOND_REACH_WORD,
+            "first packed word of a pixel beyond a texture's reach",
+        ),
         (
             "BLEND_STACK",
             crate::scene::MAX_TEXTURE_NESTING as u32 + 1,

@@ -22,14 +22,19 @@
 //!   can flip, within the 0.1 % contract.
 //!
 //! The GPU renders a texture when `2⁻²² · Q · rate ≤ 2⁻⁸` (one 8-bit level of share), that
-//! is `Q · rate ≤` [`MAX_SPREAD`], and refuses otherwise (`auto` falls back to the
-//! reference), located at the texture's block.
+//! is `Q ≤` [`reach`] `= MAX_SPREAD / rate`. Two checks hold it:
+//!
+//! - before the render, over the box of each bounded primitive wearing it ([`check`]): a
+//!   texture beyond its reach there is refused (`auto` falls back to the reference),
+//!   located at the texture's block;
+//! - during the render, for every point the kernel blends (`check_reach` in
+//!   `shaders/texture.wgsl`): a plane reaches the horizon, and reflected and refracted
+//!   rays meet it anywhere, so its hits are checked one by one, and a pixel with a point
+//!   beyond reach is handed over to the reference ([`super::layout::Handover`]).
 
 use super::precision_error::{show, Limit, PrecisionError};
-use crate::camera::PrimaryRays;
-use crate::render::RenderOptions;
 use crate::scene::{try_for_each_leaf, Bounds, Leaf, Scene, Shape, Texture, TextureKind};
-use glam::{DMat3, DMat4, DVec3};
+use glam::{DMat4, DVec3};
 
 /// `Q · rate` at most: `2⁻²² · Q · rate ≤ 2⁻⁸`.
 pub const MAX_SPREAD: f64 = 16384.0;
@@ -43,29 +48,33 @@ pub const NOISE_SLOPE: f64 = 32.0;
 /// The checkerboard's rate: faces placed to `2⁻¹³` of a cell (Q ≤ 2⁹), `MAX_SPREAD / 2⁹`.
 pub const CHECKER_RATE: f64 = 32.0;
 
-/// Whether every texture of `scene` is worn only where f32 places its points faithfully
-/// (see the module's contract); the first texture that is not, in file order of the
-/// primitives wearing it, otherwise.
-pub fn check(scene: &Scene, options: &RenderOptions) -> Result<(), PrecisionError> {
+/// Whether every texture of `scene` is worn by bounded primitives only where f32 places
+/// its points faithfully (see the module's contract); the first texture that is not, in
+/// file order of the primitives wearing it, otherwise. Planes the kernel checks hit by hit.
+pub fn check(scene: &Scene) -> Result<(), PrecisionError> {
     if !scene.has_textures() {
         return Ok(());
     }
-    let rays = PrimaryRays::for_camera(&scene.camera, options.width, options.height);
     let to_camera = DMat4::from_translation(-scene.camera.center);
     try_for_each_leaf(&scene.root, &to_camera, &mut |leaf| {
         let material = leaf_material(leaf.shape());
-        if scene.texture(material).is_none() {
-            return Ok(());
+        match camera_relative_box(leaf) {
+            Some(worn) if scene.texture(material).is_some() => check_material(scene, material, &worn),
+            _ => Ok(()),
         }
-        check_material(scene, material, camera_relative_box(leaf, &rays))
     })
 }
 
-/// Material `index` and every texture it blends, worn over `worn` (`None`: unbounded).
-fn check_material(scene: &Scene, index: u32, worn: Option<Bounds>) -> Result<(), PrecisionError> {
+/// `Q` at most for `texture`: `MAX_SPREAD / rate` (infinite for a rate of 0).
+pub fn reach(texture: &Texture) -> f64 {
+    MAX_SPREAD / change_rate(texture)
+}
+
+/// Material `index` and every texture it blends, worn over `worn`.
+fn check_material(scene: &Scene, index: u32, worn: &Bounds) -> Result<(), PrecisionError> {
     let Some(texture) = scene.texture(index) else { return Ok(()) };
     let rate = change_rate(texture);
-    let magnitude = worn.map_or(f64::INFINITY, |b| coordinate_magnitude(texture, scene.camera.center, &b));
+    let magnitude = coordinate_magnitude(texture, scene.camera.center, worn);
     let spread = magnitude * rate;
     if rate > 0.0 && (spread.is_nan() || spread > MAX_SPREAD) {
         return Err(PrecisionError {
@@ -114,8 +123,9 @@ fn leaf_material(shape: &Shape) -> u32 {
     }
 }
 
-/// The camera-relative box of the primitive's points a ray can hit, `None` where it has none.
-fn camera_relative_box(leaf: &Leaf, rays: &PrimaryRays) -> Option<Bounds> {
+/// The camera-relative box of the primitive's points a ray can hit, `None` for a plane,
+/// which has none.
+fn camera_relative_box(leaf: &Leaf) -> Option<Bounds> {
     let to_world = leaf.to_world;
     match leaf.shape() {
         Shape::Sphere { center, radius, .. } => Some(Bounds::ellipsoid(
@@ -125,27 +135,6 @@ fn camera_relative_box(leaf: &Leaf, rays: &PrimaryRays) -> Option<Bounds> {
         Shape::Mesh { mesh, .. } => {
             Some(Bounds::of_points(mesh.positions.iter().map(|&v| to_world.transform_point3(v))))
         }
-        Shape::Plane { normal, offset, .. } => plane_in_view(*normal, *offset, &to_world, rays),
-        Shape::Group(_) | Shape::Transform { .. } => None,
+        Shape::Plane { .. } | Shape::Group(_) | Shape::Transform { .. } => None,
     }
-}
-
-/// Where an orthographic view meets a plane: the box of the hits of the rays through the
-/// corners of the camera's square (a superset of the image's rectangle). A perspective
-/// view, or one along the plane, reaches arbitrarily far: `None`.
-fn plane_in_view(normal: DVec3, offset: f64, to_world: &DMat4, rays: &PrimaryRays) -> Option<Bounds> {
-    if !rays.orthographic {
-        return None;
-    }
-    let n = normal.normalize();
-    let world_normal = DMat3::from_mat4(*to_world).inverse().transpose().mul_vec3(n).try_normalize()?;
-    let on_plane = to_world.transform_point3(offset * n);
-    let d = rays.direction.normalize();
-    let facing = world_normal.dot(d);
-    if facing.abs() < 1e-9 {
-        return None;
-    }
-    let (h, u) = (rays.horizontal / 2.0, rays.up / 2.0);
-    let corners = [h + u, h - u, -h + u, -h - u];
-    Some(Bounds::of_points(corners.map(|c| c + d * (world_normal.dot(on_plane - c) / facing))))
 }

@@ -1,16 +1,17 @@
 //! The ray tree's shape, worked out on the host before the kernel is chosen: how deep the
-//! kernel's tree (`shaders/tree.wgsl`) can go for this scene and these flags, how many rays
-//! a primary ray's tree holds at most, and whether the kernel's stack holds it. A tree that
-//! does not fit is refused ([`super::support`]), so `auto` renders it with the reference
-//! rather than cut it short.
+//! kernel's tree (`shaders/tree.wgsl`) can go for this scene and these flags, and whether
+//! the kernel's stack holds it. A tree that does not fit is refused ([`super::support`]),
+//! so `auto` renders it with the reference rather than cut it short.
 
 use crate::render::Shading;
 use crate::scene::Scene;
+use glam::DVec3;
 
-/// Slots of the kernel's stack of rays waiting to be traced: a tree `BOUNCES` deep needs
-/// `BOUNCES + 1` (the kernel's `TREE_STACK`), so it goes 15 bounces deep at most. Each slot
-/// holds 13 words of private memory per invocation. The course's deepest tree is 10
-/// (scene4_05 with `-bounces 10`).
+/// Slots of the kernel's stack of rays waiting to be traced. A node's children wait there
+/// while the last pushed is traced, so a tree `d` deep whose nodes spawn at most `c` rays
+/// needs `1 + d·(c − 1)` ([`TreeShape::slots`]): 15 bounces deep for a Phong material's two
+/// rays. Each slot holds 13 words of private memory per invocation. The course's deepest
+/// tree is 10 (scene4_05 with `-bounces 10`).
 pub const TREE_STACK: u32 = 16;
 
 /// What the kernel's tree looks like for one scene and one set of shading flags.
@@ -20,62 +21,62 @@ pub struct TreeShape {
     /// at which every path's weight has fallen below `-weight`, and to 0 when no material
     /// reflects or transmits.
     pub depth: u32,
-    /// The most rays a primary ray's tree holds, the primary ray included (shadow rays not).
-    pub max_rays: u64,
+    /// The most rays a hit spawns ([`branching`]), taken as at least 2.
+    pub spawned: u32,
 }
 
 impl TreeShape {
     /// The shape for `scene` shaded as `shading` says. A ray `d` bounces deep that took `k`
     /// reflections carries at most the weight `r^k · t^(d−k)`, where `r` and `t` are the
-    /// largest lengths of a reflective and a transparent colour in the scene: it is traced
-    /// only if that reaches `-weight` (docs/SPEC.md §5), so the tree holds at most
-    /// `C(d, k)` such rays per depth and split.
+    /// largest lengths of a reflective and a transparent colour in the scene (a solid
+    /// texture's materials each spawn their own rays with their own colours): it is traced
+    /// only if that reaches `-weight` (docs/SPEC.md §5).
     pub fn new(scene: &Scene, shading: &Shading) -> TreeShape {
-        let longest = |colour: fn(&crate::scene::Material) -> glam::DVec3| {
+        let longest = |colour: fn(&crate::scene::Material) -> DVec3| {
             scene.materials.iter().map(|m| colour(m).length()).fold(0.0, f64::max)
         };
         let (r, t) = (longest(|m| m.reflective), longest(|m| m.transparent));
         // The kernel compares f32 products: allow them a little above the f64 bound.
         let threshold = shading.weight * (1.0 - 1e-5);
-        let mut shape = TreeShape { depth: 0, max_rays: 1 };
-        // Paths of depth d by reflections taken: C(d, k), kept while their weight can pass.
-        let mut row: Vec<u64> = vec![1];
-        for d in 1..=shading.bounces.min(64) {
-            let mut next = vec![0u64; d as usize + 1];
-            for (k, count) in row.iter().enumerate() {
-                next[k] = next[k].saturating_add(*count);
-                next[k + 1] = next[k + 1].saturating_add(*count);
-            }
-            let alive = next
-                .iter()
-                .enumerate()
-                .map(|(k, count)| {
-                    let weight = r.powi(k as i32) * t.powi((d as usize - k) as i32);
-                    if weight > 0.0 && weight >= threshold {
-                        *count
-                    } else {
-                        0
-                    }
-                })
-                .fold(0u64, u64::saturating_add);
-            if alive == 0 {
-                break;
-            }
-            shape.depth = d;
-            shape.max_rays = shape.max_rays.saturating_add(alive);
-            row = next;
-        }
-        if shading.bounces > 64 && shape.depth == 64 {
-            // Deeper than anything the kernel holds: only the depth matters for the refusal.
-            shape.depth = shading.bounces;
-            shape.max_rays = u64::MAX;
-        }
-        shape
+        let alive = |d: u32| {
+            (0..=d).any(|k| {
+                let weight = r.powi(k as i32) * t.powi((d - k) as i32);
+                weight > 0.0 && weight >= threshold
+            })
+        };
+        // A deeper tree than the stack can hold only needs to be known as one.
+        let depth = (1..=shading.bounces.min(TREE_STACK * 4)).take_while(|&d| alive(d)).last().unwrap_or(0);
+        let depth = if depth == TREE_STACK * 4 { shading.bounces } else { depth };
+        let spawned = (0..scene.materials.len() as u32).map(|m| branching(scene, m)).max().unwrap_or(0);
+        TreeShape { depth, spawned: spawned.max(2) }
+    }
+
+    /// The stack slots the tree needs at most: `1 + depth · (spawned − 1)`.
+    pub fn slots(&self) -> u64 {
+        1 + self.depth as u64 * (self.spawned as u64 - 1)
+    }
+
+    /// The deepest tree of this branching the stack holds.
+    pub fn deepest(&self) -> u32 {
+        (TREE_STACK - 1) / (self.spawned - 1)
     }
 
     /// Whether the kernel's stack holds the tree.
     pub fn fits_stack(&self) -> bool {
-        self.depth < TREE_STACK
+        self.slots() <= TREE_STACK as u64
+    }
+}
+
+/// How many rays a hit on material `index` may spawn: one for a reflective colour and one
+/// for a transparent one; a solid texture, those of every material it blends (the kernel
+/// pushes each one's rays, weighted by its share: `shaders/tree.wgsl`).
+pub fn branching(scene: &Scene, index: u32) -> u32 {
+    match scene.texture(index) {
+        Some(texture) => texture.materials.iter().map(|&m| branching(scene, m)).sum(),
+        None => {
+            let material = &scene.materials[index as usize];
+            (material.reflective != DVec3::ZERO) as u32 + (material.transparent != DVec3::ZERO) as u32
+        }
     }
 }
 
@@ -103,30 +104,30 @@ mod tests {
     #[test]
     fn a_full_binary_tree_without_a_weight() {
         let shape = TreeShape::new(&scene("1 0 0", "1 0 0"), &shading(3, 0.0));
-        assert_eq!(shape, TreeShape { depth: 3, max_rays: 15 });
+        assert_eq!(shape, TreeShape { depth: 3, spawned: 2 });
     }
 
     #[test]
     fn a_mirror_alone_makes_a_chain() {
         let shape = TreeShape::new(&scene("0.5 0 0", "0 0 0"), &shading(10, 0.0));
-        assert_eq!(shape, TreeShape { depth: 10, max_rays: 11 });
+        assert_eq!(shape, TreeShape { depth: 10, spawned: 2 });
     }
 
     /// 0.5^6 = 0.0156 ≥ 0.01 > 0.5^7: the weight stops a mirror chain at depth 6.
     #[test]
     fn the_weight_stops_the_tree() {
         let shape = TreeShape::new(&scene("0.5 0 0", "0 0 0"), &shading(10, 0.01));
-        assert_eq!(shape, TreeShape { depth: 6, max_rays: 7 });
+        assert_eq!(shape, TreeShape { depth: 6, spawned: 2 });
         // Reflective 0.5, transparent 0.25: depth 2 keeps 0.25 (r·r), 0.125 (r·t, twice),
         // not t·t = 0.0625 below 0.1.
         let shape = TreeShape::new(&scene("0.5 0 0", "0.25 0 0"), &shading(5, 0.1));
-        assert_eq!(shape, TreeShape { depth: 3, max_rays: 1 + 2 + 3 + 1 });
+        assert_eq!(shape, TreeShape { depth: 3, spawned: 2 });
     }
 
     #[test]
     fn no_bounce_without_a_reflective_or_transparent_material() {
         let shape = TreeShape::new(&scene("0 0 0", "0 0 0"), &shading(5, 0.0));
-        assert_eq!(shape, TreeShape { depth: 0, max_rays: 1 });
+        assert_eq!(shape, TreeShape { depth: 0, spawned: 2 });
         assert!(shape.fits_stack());
     }
 
@@ -137,5 +138,25 @@ mod tests {
         assert!(!shape.fits_stack());
         assert!(TreeShape::new(&scene("1 0 0", "0 0 0"), &shading(TREE_STACK - 1, 0.0)).fits_stack());
         assert!(!TreeShape::new(&scene("1 0 0", "0 0 0"), &shading(TREE_STACK, 0.0)).fits_stack());
+    }
+
+    /// A checkerboard of a mirror and glass spawns three rays where it hits (the mirror's
+    /// reflection, the glass's reflection and refraction): a tree d deep waits 2 per level.
+    #[test]
+    fn a_texture_spawns_the_rays_of_every_material_it_blends() {
+        let text = "OrthographicCamera { center 0 0 10 direction 0 0 -1 up 0 1 0 size 5 }
+             Materials { numMaterials 4
+               PhongMaterial { diffuseColor 1 1 1 reflectiveColor 0.5 0.5 0.5 }
+               PhongMaterial { diffuseColor 1 1 1 reflectiveColor 0.5 0.5 0.5 transparentColor 0.5 0.5 0.5 indexOfRefraction 1.5 }
+               PhongMaterial { diffuseColor 1 1 1 }
+               Checkerboard { materialIndex 0 materialIndex 1 } }
+             Group { numObjects 1 MaterialIndex 3 Sphere { center 0 0 0 radius 1 } }";
+        let scene = parse_scene(text, Path::new("tree.txt")).unwrap();
+        assert_eq!([0, 1, 2, 3].map(|m| branching(&scene, m)), [1, 2, 0, 3]);
+        assert_eq!(TreeShape::new(&scene, &shading(5, 0.0)), TreeShape { depth: 5, spawned: 3 });
+        assert_eq!(TreeShape::new(&scene, &shading(5, 0.0)).slots(), 11);
+        assert_eq!(TreeShape::new(&scene, &shading(5, 0.0)).deepest(), 7);
+        assert!(TreeShape::new(&scene, &shading(7, 0.0)).fits_stack(), "1 + 7·2 = 15 slots");
+        assert!(!TreeShape::new(&scene, &shading(8, 0.0)).fits_stack(), "1 + 8·2 = 17 slots");
     }
 }
