@@ -340,7 +340,7 @@ pub fn standard_cases(corpus: &Path, quick: bool) -> Result<Vec<Case>, scene::Sc
         cases.extend(course_line_cases(corpus, "a4", &["output4_04d"], 64)?);
         let sampling = Sampling { sampler: sampling::Sampler::Jittered(4), filter: Filter::Gaussian(0.4), seed: 0 };
         let bunny = mesh_scene("bunny_1k", scene::load_obj(&course.join("bunny_1k.obj"))?);
-        cases.push(Case { sampling: Some(sampling), ..case("bunny_1k, 4 spp", bunny, 64) });
+        cases.push(Case { sampling: Some(sampling), ..case("bunny_1k_4spp", bunny, 64) });
         return Ok(cases);
     }
     let mut course_files: Vec<PathBuf> = std::fs::read_dir(&course)
@@ -384,7 +384,7 @@ pub fn standard_cases(corpus: &Path, quick: bool) -> Result<Vec<Case>, scene::Sc
     // of σ = 0.4, filtered on the device.
     for n in SAMPLES_PER_PIXEL {
         let sampling = Sampling { sampler: sampling::Sampler::Jittered(n), filter: Filter::Gaussian(0.4), seed: 0 };
-        let name = format!("bunny_40k, {n} spp");
+        let name = format!("bunny_40k_{n}spp");
         cases.push(Case { sampling: Some(sampling), ..case(&name, bunny.clone(), 512) });
     }
     cases.extend(course_line_cases(corpus, "a4", A4_LINES, 200)?);
