@@ -250,3 +250,7 @@ var<private> P: Params;
 @group(0) @binding(14) var<storage, read> permutation: array<u32>;
 // The -stats counts (shaders/stats.wgsl), where STATS; never touched otherwise.
 @group(0) @binding(15) var<storage, read_write> counters: array<atomic<u32>>;
+// A tile's samples, SAMPLE_WORDS words each, and their parameters (shaders/sampling.wgsl),
+// where the render samples (docs/SPEC.md §8); a single zero otherwise.
+@group(0) @binding(16) var<storage, read_write> samples: array<u32>;
+@group(0) @binding(17) var<storage, read> sampling: Sampling;

@@ -79,9 +79,15 @@ impl PrimaryRays {
     /// each in −½…½ along the longer side; the shorter side is cropped symmetrically so that
     /// pixels stay square (docs/SPEC.md §3).
     pub fn screen(&self, i: u32, j: u32) -> (f64, f64) {
+        self.screen_at(i, j, (0.5, 0.5))
+    }
+
+    /// Screen coordinates of the point `(sx, sy)` (pixel-local, in [0, 1)², y up) of pixel
+    /// (i, j): a sample's (docs/SPEC.md §8). The centre is (½, ½).
+    pub fn screen_at(&self, i: u32, j: u32, (sx, sy): (f64, f64)) -> (f64, f64) {
         let longer = self.width.max(self.height) as f64;
-        let x = (i as f64 + 0.5 - self.width as f64 / 2.0) / longer;
-        let y = (j as f64 + 0.5 - self.height as f64 / 2.0) / longer;
+        let x = (i as f64 + sx - self.width as f64 / 2.0) / longer;
+        let y = (j as f64 + sy - self.height as f64 / 2.0) / longer;
         (x, y)
     }
 
@@ -90,7 +96,13 @@ impl PrimaryRays {
     /// image plane (`t_min = −∞`, so objects behind the plane are seen, at negative t); a
     /// perspective ray starts at the eye (`t_min = 0`). Neither has a far limit.
     pub fn ray(&self, i: u32, j: u32) -> Ray {
-        let (x, y) = self.screen(i, j);
+        self.ray_at(i, j, (0.5, 0.5))
+    }
+
+    /// The ray through the point `position` (pixel-local, y up) of pixel (i, j): a
+    /// sample's ray (docs/SPEC.md §8); [`PrimaryRays::ray`] at the centre.
+    pub fn ray_at(&self, i: u32, j: u32, position: (f64, f64)) -> Ray {
+        let (x, y) = self.screen_at(i, j, position);
         let offset = x * self.horizontal + y * self.up;
         if self.orthographic {
             Ray::new(self.center + offset, self.direction, f64::NEG_INFINITY)

@@ -32,4 +32,5 @@ pub mod grid;
 pub mod image_io;
 pub mod metrics;
 pub mod render;
+pub mod sampling;
 pub mod scene;

@@ -49,7 +49,7 @@ fn render(args: &RenderArgs, habits: Habits) -> Result<(), Failure> {
     if let Some(preview) = app::job::preview_notice(args).filter(|_| progress) {
         say(&format!("note: {preview}"));
     }
-    if args.files.outputs().is_empty() {
+    if !args.writes_something() {
         return Ok(()); // `-gui` alone: the notice said so.
     }
     let (backend, report) = if args.backend == BackendChoice::Auto {

@@ -119,6 +119,9 @@ pub struct RenderOptions {
     pub visualize_grid: bool,
     /// `-stats`: count the course's statistics ([`RayStats`]).
     pub stats: bool,
+    /// Several samples per pixel and a filter (docs/SPEC.md §8); `None`: one ray through
+    /// each pixel's centre, the pixel that sample.
+    pub sampling: Option<crate::sampling::Sampling>,
 }
 
 /// The course's `RayTracingStats` (assignment 6): what a render counted.
@@ -201,6 +204,7 @@ impl RenderOptions {
             grid: None,
             visualize_grid: false,
             stats: false,
+            sampling: None,
         }
     }
 

@@ -262,7 +262,7 @@ fn batch_runs_every_line_and_reports_failures() {
 
 /// The bench's quick version runs in seconds and writes a table, a CSV and a plot whose
 /// rows carry both a speed and an error (so the bench cannot rot unnoticed), one of them an
-/// A4 line whose rays are all counted.
+/// A4 line whose rays are all counted, and one of 4 samples per pixel.
 #[test]
 fn bench_quick_writes_table_csv_and_plot() {
     let Some(corpus) = common::corpus() else { return };
@@ -280,7 +280,10 @@ fn bench_quick_writes_table_csv_and_plot() {
     let header: Vec<&str> = lines.next().unwrap().split(',').collect();
     let column = |name: &str| header.iter().position(|h| *h == name).unwrap_or_else(|| panic!("no column {name}"));
     let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
-    assert_eq!(rows.len(), 5, "{csv}");
+    assert_eq!(rows.len(), 6, "{csv}");
+    // Assignment 7: 4 jittered samples per pixel, every one a ray.
+    let sampled = rows.iter().find(|r| r[0] == "bunny_1k_4spp").expect("a row of 4 samples per pixel");
+    assert_eq!(sampled[column("rays")], (4 * 64 * 64).to_string(), "{sampled:?}");
     // The A4 line (a mirror sphere, 3 bounces, shadows) counts every ray, more than a
     // pixel's one, and times the reference on the whole image.
     let a4 = rows.iter().find(|r| r[0] == "output4_04d").expect("an A4 row");

@@ -28,11 +28,9 @@ enum Refusal {
 
 /// The known reason in one refusal's stderr, from the kernel's own wording.
 fn refusal_kind(message: &str) -> Option<Refusal> {
-    [
-        ("is outside the range the GPU's f32 kernel renders faithfully", Refusal::TextureRange),
-    ]
-    .into_iter()
-    .find_map(|(text, kind)| message.contains(text).then_some(kind))
+    [("is outside the range the GPU's f32 kernel renders faithfully", Refusal::TextureRange)]
+        .into_iter()
+        .find_map(|(text, kind)| message.contains(text).then_some(kind))
 }
 
 /// Runs `command` in `dir` with `--backend backend`: `Ok` on success, else the stderr lines

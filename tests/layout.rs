@@ -182,6 +182,22 @@ fn host_structs_match_the_shader() {
     );
     check(
         &m,
+        "Sampling",
+        size_of::<raycaster::gpu::layout::GpuSampling>(),
+        &[
+            ("count", offset_of!(raycaster::gpu::layout::GpuSampling, count)),
+            ("side", offset_of!(raycaster::gpu::layout::GpuSampling, side)),
+            ("seed", offset_of!(raycaster::gpu::layout::GpuSampling, seed)),
+            ("kind", offset_of!(raycaster::gpu::layout::GpuSampling, kind)),
+            ("filter_kind", offset_of!(raycaster::gpu::layout::GpuSampling, filter_kind)),
+            ("radius", offset_of!(raycaster::gpu::layout::GpuSampling, radius)),
+            ("parameter", offset_of!(raycaster::gpu::layout::GpuSampling, parameter)),
+            ("first_row", offset_of!(raycaster::gpu::layout::GpuSampling, first_row)),
+            ("rows", offset_of!(raycaster::gpu::layout::GpuSampling, rows)),
+        ],
+    );
+    check(
+        &m,
         "BvhNode",
         size_of::<BvhNode>(),
         &[
@@ -258,6 +274,7 @@ fn override_constants_match_the_host() {
         textures: true,
         stats: true,
         voxels: true,
+        stage: raycaster::gpu::Stage::Pixels,
     };
     let mut host: Vec<String> = config.constants().iter().map(|(name, _)| name.to_string()).collect();
     host.sort();
@@ -334,7 +351,7 @@ fn sizes_match_the_host() {
     assert_eq!(shader_constant(&m, "BIN_SIDE"), naga::Literal::U32(raycaster::gpu::binning::BIN_SIDE));
     assert_eq!(shader_constant(&m, "WORKGROUP"), naga::Literal::U32(raycaster::gpu::WORKGROUP));
     let names: Vec<&str> = m.entry_points.iter().map(|e| e.name.as_str()).collect();
-    assert_eq!(names.len(), 2, "{names:?}");
+    assert_eq!(names.len(), 4, "{names:?}");
     for entry in &m.entry_points {
         let w = raycaster::gpu::WORKGROUP;
         assert_eq!(entry.workgroup_size, [w, w, 1], "{}", entry.name);

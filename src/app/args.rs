@@ -4,6 +4,7 @@
 
 use raycaster::grid::GridSize;
 use raycaster::render::{Output, Outputs, Shading, SphereTest, TriangleTest};
+use raycaster::sampling::Sampling;
 use std::fmt;
 use std::path::{Path, PathBuf};
 
@@ -93,6 +94,45 @@ pub struct RenderArgs {
     pub visualize_grid: bool,
     /// `-stats`: print the course's statistics after the render.
     pub stats: bool,
+    /// A sampler or a filter (docs/SPEC.md §8); `None`: one sample at each pixel's centre.
+    pub sampling: Option<Sampling>,
+    /// `-render_samples` and `-render_filter`.
+    pub pictures: Pictures,
+}
+
+/// One of the course's pictures of samples or filter weights: its file and enlargement.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Picture {
+    pub path: PathBuf,
+    pub zoom: u32,
+}
+
+/// `-render_samples FILE ZOOM` and `-render_filter FILE ZOOM`.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Pictures {
+    pub samples: Option<Picture>,
+    pub filter: Option<Picture>,
+}
+
+impl Pictures {
+    pub fn is_empty(&self) -> bool {
+        self.samples.is_none() && self.filter.is_none()
+    }
+
+    /// The pictures asked for, with their flags.
+    pub fn named(&self) -> Vec<(&'static str, &Picture)> {
+        [("-render_samples", self.samples.as_ref()), ("-render_filter", self.filter.as_ref())]
+            .into_iter()
+            .filter_map(|(flag, p)| Some((flag, p?)))
+            .collect()
+    }
+}
+
+impl RenderArgs {
+    /// Whether the line writes anything: an image or a picture.
+    pub fn writes_something(&self) -> bool {
+        !self.files.outputs().is_empty() || !self.pictures.is_empty()
+    }
 }
 
 /// The files of `-output`, `-normals` and `-depth MIN MAX`.

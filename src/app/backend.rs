@@ -194,7 +194,9 @@ fn reference_band<E>(
 ) -> Result<RenderStats, E> {
     let reference = Reference::new(scene, options);
     let mut stats = RenderStats::default();
-    for (offset, rows) in row_tiles(rows, CPU_TILE_PIXELS / options.width) {
+    // Samples are kept until the tile is filtered: fewer rows per tile the more there are.
+    let samples = options.sampling.map_or(1, |s| s.count());
+    for (offset, rows) in row_tiles(rows, CPU_TILE_PIXELS / options.width / samples) {
         let first_row = first + offset;
         on_tile(first_row, reference.rows(first_row, rows))?;
         stats.tiles += 1;
@@ -220,7 +222,8 @@ pub const REFERENCE_QUICKER_BELOW: u64 = 2_000_000;
 pub fn reference_is_quicker(scene: &Scene, options: &RenderOptions) -> bool {
     let primitives = scene.primitive_counts().total() as u64;
     let per_ray = options.grid.map_or(primitives, |g| primitives.min(g.nx as u64 + g.ny as u64 + g.nz as u64));
-    options.pixel_count() as u64 * per_ray <= REFERENCE_QUICKER_BELOW
+    let samples = options.sampling.map_or(1, |s| s.count()) as u64;
+    options.pixel_count() as u64 * samples * per_ray <= REFERENCE_QUICKER_BELOW
 }
 
 /// Primitives (each triangle of a mesh counted) up to which `auto` traces a scene that needs

@@ -14,6 +14,7 @@ use raycaster::gpu::{Acceleration, GpuError, GpuOptions, GpuRenderer};
 use raycaster::grid::GridSize;
 use raycaster::metrics::{compare_frames, depth_range_of, OutputErrors};
 use raycaster::render::{Frame, Output, Pixel, RenderOptions, Shading, TriangleTest};
+use raycaster::sampling::{self, Filter, Sampling};
 use raycaster::scene::{
     self, Background, Bounds, Camera, DirectionalLight, Light, Material, Mesh, Object, Projection, Scene, Shape,
 };
@@ -38,6 +39,8 @@ pub struct Case {
     /// GPU uses, so that a 40 000-triangle mesh with shadows takes it seconds, not minutes
     /// (its images are the same with and without a grid: tests/grid.rs).
     pub reference_grid: Option<GridSize>,
+    /// Several samples per pixel and a filter (docs/SPEC.md §8).
+    pub sampling: Option<Sampling>,
 }
 
 impl Case {
@@ -142,6 +145,7 @@ pub fn run_case(gpu: &GpuRenderer, case: &Case, runs: usize) -> Result<Row, GpuE
         triangle_test: case.triangle_test,
         shading: case.shading,
         grid: case.grid,
+        sampling: case.sampling,
         ..RenderOptions::all(case.width, case.height)
     };
     let reference_options = RenderOptions { grid: case.reference_grid.or(case.grid), ..options };
@@ -149,6 +153,12 @@ pub fn run_case(gpu: &GpuRenderer, case: &Case, runs: usize) -> Result<Row, GpuE
     let counts = case.scene.primitive_counts();
     // Secondary rays: every pixel is compared (and the reference's time is part of the row).
     let budget = if case.secondary_rays() { usize::MAX } else { sample_budget(counts.triangles) };
+    // With sampling the reference traces, for each pixel it checks, every sample of the
+    // pixels its filter reads.
+    let budget = match case.sampling {
+        Some(s) => (budget / (s.count() as usize * (2 * s.radius() as usize + 1).pow(2))).max(64),
+        None => budget,
+    };
     let sampler = Sampler::new(options.width, options.height, budget);
     memory::reset_peak();
     let mut kernel = Vec::new();
@@ -180,7 +190,9 @@ pub fn run_case(gpu: &GpuRenderer, case: &Case, runs: usize) -> Result<Row, GpuE
     let start = Instant::now();
     let reference = reference_renderer.pixels(&positions);
     let reference_ms = case.secondary_rays().then(|| start.elapsed().as_secs_f64() * 1e3);
-    let rays = if case.secondary_rays() { reference_renderer.rays_traced() } else { options.pixel_count() as u64 };
+    let samples = case.sampling.map_or(1, |s| s.count()) as u64;
+    let rays =
+        if case.secondary_rays() { reference_renderer.rays_traced() } else { options.pixel_count() as u64 * samples };
     let ours = samples_frame(&options, &gpu_samples);
     Ok(Row {
         name: case.name.clone(),
@@ -317,6 +329,7 @@ pub fn standard_cases(corpus: &Path, quick: bool) -> Result<Vec<Case>, scene::Sc
         shading: Shading::default(),
         grid: None,
         reference_grid: None,
+        sampling: None,
     };
     let mut cases = Vec::new();
     if quick {
@@ -325,6 +338,9 @@ pub fn standard_cases(corpus: &Path, quick: bool) -> Result<Vec<Case>, scene::Sc
         }
         cases.push(case("bunny_1k", mesh_scene("bunny_1k", scene::load_obj(&course.join("bunny_1k.obj"))?), 64));
         cases.extend(course_line_cases(corpus, "a4", &["output4_04d"], 64)?);
+        let sampling = Sampling { sampler: sampling::Sampler::Jittered(4), filter: Filter::Gaussian(0.4), seed: 0 };
+        let bunny = mesh_scene("bunny_1k", scene::load_obj(&course.join("bunny_1k.obj"))?);
+        cases.push(Case { sampling: Some(sampling), ..case("bunny_1k_4spp", bunny, 64) });
         return Ok(cases);
     }
     let mut course_files: Vec<PathBuf> = std::fs::read_dir(&course)
@@ -364,6 +380,13 @@ pub fn standard_cases(corpus: &Path, quick: bool) -> Result<Vec<Case>, scene::Sc
     for test in [TriangleTest::Cramer, TriangleTest::Moller] {
         cases.push(Case { triangle_test: test, ..case("bunny_40k", bunny.clone(), 2048) });
     }
+    // Assignment 7: 1, 4, 16 and 36 jittered samples per pixel through the course's gaussian
+    // of σ = 0.4, filtered on the device.
+    for n in SAMPLES_PER_PIXEL {
+        let sampling = Sampling { sampler: sampling::Sampler::Jittered(n), filter: Filter::Gaussian(0.4), seed: 0 };
+        let name = format!("bunny_40k_{n}spp");
+        cases.push(Case { sampling: Some(sampling), ..case(&name, bunny.clone(), 512) });
+    }
     cases.extend(course_line_cases(corpus, "a4", A4_LINES, 200)?);
     cases.extend(grid_comparison(corpus)?);
     // The design choice measured in the same run: each way of finding candidates.
@@ -375,6 +398,9 @@ pub fn standard_cases(corpus: &Path, quick: bool) -> Result<Vec<Case>, scene::Sc
     }
     Ok(cases)
 }
+
+/// Samples per pixel of the bench's rows of assignment 7.
+const SAMPLES_PER_PIXEL: [u32; 4] = [1, 4, 16, 36];
 
 /// The lines of the course's `a4/commands.txt` the bench measures, by their `-output`: a
 /// sphere's shadow; a mirrored floor; a mirror sphere, 3 bounces; transparent bars, 10 and 5
@@ -419,6 +445,7 @@ fn grid_comparison(corpus: &Path) -> Result<Vec<Case>, scene::SceneError> {
                 acceleration,
                 grid,
                 reference_grid: line.grid,
+                sampling: None,
                 ..line
             });
         }
@@ -464,6 +491,7 @@ fn course_line_cases(corpus: &Path, folder: &str, lines: &[&str], size: u32) -> 
             shading,
             grid,
             reference_grid: grid,
+            sampling: None,
         });
     }
     Ok(cases)

@@ -7,12 +7,13 @@
 //! are one line naming the flag; the binary exits with status 2 on them.
 
 use crate::app::args::{
-    BenchArgs, Command, CommandLine, DepthArgs, Habits, RenderArgs, Split, StitchArgs, UsageError, Verbosity,
+    BenchArgs, Command, CommandLine, DepthArgs, Habits, Picture, RenderArgs, Split, StitchArgs, UsageError, Verbosity,
     MAX_PIXELS, MAX_SIDE,
 };
 use crate::app::flags::{self, flag_name, Answer, Flag, Given, Takes, Verb};
 use raycaster::grid::GridSize;
 use raycaster::render::{Output, Outputs};
+use raycaster::sampling::{Sampler, Sampling, DEFAULT_FILTER, MAX_SAMPLES};
 use std::ffi::OsString;
 use std::path::PathBuf;
 
@@ -132,6 +133,7 @@ fn render_or_compare(verb: Verb, given: Given) -> Result<Command, UsageError> {
         return Err(UsageError(format!("--tile {}/{}: more bands than the image's {height} rows", t.index, t.count)));
     }
     let named = given.files.outputs();
+    let sampling = sampling(&given);
     let args = RenderArgs {
         input: given.input.expect("required"),
         width,
@@ -147,7 +149,13 @@ fn render_or_compare(verb: Verb, given: Given) -> Result<Command, UsageError> {
         grid: given.grid,
         visualize_grid: given.visualize_grid,
         stats: given.stats,
+        sampling,
+        pictures: given.pictures,
     };
+    pictures_fit(&args)?;
+    if args.tile.is_some() && !args.pictures.is_empty() {
+        return Err(UsageError("--tile: -render_samples and -render_filter pictures are not split into bands".into()));
+    }
     if args.visualize_grid && args.grid.is_none() {
         return Err(UsageError("-visualize_grid draws the grid's cells: give -grid NX NY NZ too".into()));
     }
@@ -159,7 +167,7 @@ fn render_or_compare(verb: Verb, given: Given) -> Result<Command, UsageError> {
     }
     if verb == Verb::Render {
         // `-gui` alone asks for the course's window only: nothing to render, not an error.
-        if named.is_empty() && !given.gui {
+        if named.is_empty() && args.pictures.is_empty() && !given.gui {
             return Err(UsageError("nothing to write: give -output, -normals or -depth".into()));
         }
         return Ok(Command::Render(args));
@@ -169,6 +177,37 @@ fn render_or_compare(verb: Verb, given: Given) -> Result<Command, UsageError> {
         return Err(UsageError("compare: nothing to compare: give --outputs color,normals,depth".into()));
     }
     Ok(Command::Compare { args, outputs, max_diff_pixels: given.max_diff_pixels })
+}
+
+/// docs/SPEC.md §8: a sampler or a filter asks for sampling; the sampler defaults to one
+/// sample at the pixel's centre, the filter to the box of radius ½.
+fn sampling(given: &Given) -> Option<Sampling> {
+    if given.sampler.is_none() && given.filter.is_none() {
+        return None;
+    }
+    Some(Sampling {
+        sampler: given.sampler.unwrap_or(Sampler::Uniform(1)),
+        filter: given.filter.unwrap_or(DEFAULT_FILTER),
+        seed: given.seed.unwrap_or(0),
+    })
+}
+
+/// The pictures' sizes: `W·ZOOM × H·ZOOM` (the filter's one more each way) within the
+/// image limits of `-size`.
+fn pictures_fit(args: &RenderArgs) -> Result<(), UsageError> {
+    for (flag, picture) in args.pictures.named() {
+        let extra = u64::from(flag == "-render_filter");
+        let (w, h) =
+            (args.width as u64 * picture.zoom as u64 + extra, args.height as u64 * picture.zoom as u64 + extra);
+        if w > MAX_SIDE as u64 || h > MAX_SIDE as u64 || w * h > MAX_PIXELS {
+            return Err(UsageError(format!(
+                "{flag} {} {}: a picture of {w}×{h} pixels is past the limits of -size",
+                picture.path.display(),
+                picture.zoom
+            )));
+        }
+    }
+    Ok(())
 }
 
 /// Where `raycaster bench` looks for the course's files without `--corpus`:
@@ -236,6 +275,9 @@ impl<'a> Values<'a> {
             Takes::Cells(set) => set(given, self.cells(text)?),
             Takes::Choice { names, set } => set(given, self.choice(text, &names())?),
             Takes::Real { what, set } => set(given, self.real(text, what)?),
+            Takes::Positive { what, set } => set(given, self.positive(text, what)?),
+            Takes::Samples { square, set } => set(given, self.samples(text, *square)?),
+            Takes::Picture(set) => set(given, self.picture(text)?),
             Takes::Number { what, min, max, set } => set(given, self.number(text, what, *min, *max)?),
             Takes::Split(set) => set(given, self.split(text)?),
             Takes::Outputs(set) => set(given, self.outputs(text)?),
@@ -385,6 +427,44 @@ impl<'a> Values<'a> {
         }
     }
 
+    /// A filter's radius or σ: a finite number > 0.
+    fn positive(&mut self, flag: &str, what: &str) -> Result<f64, UsageError> {
+        let value = self.take(flag, what)?;
+        let text = value.to_string_lossy();
+        match text.parse::<f64>() {
+            Ok(w) if w.is_finite() && w > 0.0 => Ok(w),
+            _ => Err(UsageError(format!("{flag}: '{text}' is not a number > 0"))),
+        }
+    }
+
+    /// Samples per pixel: 1…[`MAX_SAMPLES`], with `square` a perfect square (the regular
+    /// patterns lay them on a √n × √n grid).
+    fn samples(&mut self, flag: &str, square: bool) -> Result<u32, UsageError> {
+        let n = self.number(flag, "a number of samples", 1, MAX_SAMPLES as u64)? as u32;
+        if square && n.isqrt() * n.isqrt() != n {
+            let (below, above) = (n.isqrt() * n.isqrt(), (n.isqrt() + 1) * (n.isqrt() + 1));
+            return Err(UsageError(format!(
+                "{flag}: {n} is not a square number: the samples lie on a √n×√n grid (try {below} or {above})"
+            )));
+        }
+        Ok(n)
+    }
+
+    /// `FILE ZOOM` of `-render_samples` and `-render_filter`.
+    fn picture(&mut self, flag: &str) -> Result<Picture, UsageError> {
+        let what = "two values: FILE ZOOM";
+        let path = self.take(flag, what)?;
+        if path.is_empty() {
+            return Err(UsageError(format!("{flag} expects a file name, got an empty one")));
+        }
+        let zoom = self.take(flag, what)?;
+        let text = zoom.to_string_lossy();
+        match text.parse::<u32>() {
+            Ok(zoom) if (1..=MAX_SIDE).contains(&zoom) => Ok(Picture { path: PathBuf::from(path), zoom }),
+            _ => Err(UsageError(format!("{flag}: '{text}' is not a whole number from 1 to {MAX_SIDE}"))),
+        }
+    }
+
     fn number(&mut self, flag: &str, what: &str, min: u64, max: u64) -> Result<u64, UsageError> {
         let value = self.take(flag, what)?;
         let text = value.to_string_lossy();
@@ -429,6 +509,46 @@ mod tests {
         assert_eq!(args.files.depth, Some(DepthArgs { min: 9.0, max: 11.0, path: "d.tga".into() }));
         assert!(args.shading.shade_back);
         assert_eq!(args.backend, BackendChoice::Auto);
+    }
+
+    /// docs/SPEC.md §8: the samplers, the filters and their defaults, the seed, the pictures.
+    #[test]
+    fn sampling_flags() {
+        use raycaster::sampling::Filter;
+        assert_eq!(render("-input s -size 9 9 -output o.tga").sampling, None);
+        let args = render("-input s -size 9 9 -output o.tga -jittered_samples 16 --seed 7");
+        assert_eq!(args.sampling, Some(Sampling { sampler: Sampler::Jittered(16), filter: Filter::Box(0.5), seed: 7 }));
+        let args = render("-input s -size 9 9 -output o.tga -gaussian_filter 0.4");
+        assert_eq!(
+            args.sampling,
+            Some(Sampling { sampler: Sampler::Uniform(1), filter: Filter::Gaussian(0.4), seed: 0 })
+        );
+        let args = render("-input s -size 9 9 -render_filter f.tga 20 -tent_filter 1.7");
+        assert_eq!(args.pictures.filter, Some(Picture { path: "f.tga".into(), zoom: 20 }));
+        assert!(args.files.outputs().is_empty());
+        let cases = [
+            (
+                "-uniform_samples 5",
+                "-uniform_samples: 5 is not a square number: the samples lie on a √n×√n grid (try 4 or 9)",
+            ),
+            ("-jittered_samples 8", "-jittered_samples: 8 is not a square number"),
+            ("-random_samples 0", "-random_samples: '0' is not a whole number from 1 to 1024"),
+            ("-box_filter 0", "-box_filter: '0' is not a number > 0"),
+            ("-tent_filter -1", "-tent_filter: '-1' is not a number > 0"),
+            ("-gaussian_filter nan", "-gaussian_filter: 'nan' is not a number > 0"),
+            ("--seed -1", "--seed: '-1' is not a whole number from 0 to 4294967295"),
+            ("-render_samples s.tga 0", "-render_samples: '0' is not a whole number from 1 to 65535"),
+            (
+                "-render_samples s.tga 8000",
+                "-render_samples s.tga 8000: a picture of 72000×72000 pixels is past the limits",
+            ),
+            ("-render_filter f.tga 2 --tile 0/2", "--tile: -render_samples and -render_filter pictures are not split"),
+        ];
+        for (extra, needle) in cases {
+            let line = format!("-input s -size 9 9 -output o.tga {extra}");
+            let err = parse(&line).expect_err(&line);
+            assert!(err.0.contains(needle), "{line}: {err}");
+        }
     }
 
     #[test]

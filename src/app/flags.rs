@@ -3,9 +3,12 @@
 //! usage text ([`usage`]) and the "did you mean" suggestions ([`unknown_flag`]) all read
 //! this table, so a flag is added, renamed or documented in one place.
 
-use crate::app::args::{BackendChoice, DepthArgs, OutputPaths, Split, UsageError, Verbosity, MAX_THREADS};
+use crate::app::args::{
+    BackendChoice, DepthArgs, OutputPaths, Picture, Pictures, Split, UsageError, Verbosity, MAX_THREADS,
+};
 use raycaster::grid::GridSize;
 use raycaster::render::{Outputs, Shading, SphereTest, TriangleTest};
+use raycaster::sampling::{Filter, Sampler};
 use std::path::PathBuf;
 
 /// What a command line is: a render, or one of the commands named by its first word.
@@ -102,6 +105,14 @@ pub struct Given {
     pub visualize_grid: bool,
     /// `-stats`.
     pub stats: bool,
+    /// `-random_samples`, `-uniform_samples` or `-jittered_samples` (the last one wins).
+    pub sampler: Option<Sampler>,
+    /// `-box_filter`, `-tent_filter` or `-gaussian_filter` (the last one wins).
+    pub filter: Option<Filter>,
+    /// `--seed N`.
+    pub seed: Option<u32>,
+    /// `-render_samples FILE ZOOM` and `-render_filter FILE ZOOM`.
+    pub pictures: Pictures,
 }
 
 /// A flag that answers the command line by itself, whatever else it holds.
@@ -132,6 +143,18 @@ pub enum Takes {
         names: fn() -> Vec<&'static str>,
         set: fn(&mut Given, usize),
     },
+    /// A number of samples per pixel, 1…[`MAX_SAMPLES`]; with `square`, a perfect square.
+    Samples {
+        square: bool,
+        set: fn(&mut Given, u32),
+    },
+    /// A finite number > 0; `what` names it where it is missing.
+    Positive {
+        what: &'static str,
+        set: fn(&mut Given, f64),
+    },
+    /// `FILE ZOOM`: an image file and a whole number ≥ 1.
+    Picture(fn(&mut Given, Picture)),
     /// A finite number ≥ 0; `what` names it where it is missing.
     Real {
         what: &'static str,
@@ -159,7 +182,7 @@ impl Takes {
     /// Whether it takes more than one value. Those cannot be glued on with `=`:
     /// `-size=200 200` would read as if the second value belonged to no flag.
     pub fn several_values(&self) -> bool {
-        matches!(self, Takes::Size(_) | Takes::Depth(_) | Takes::Steps(_) | Takes::Cells(_))
+        matches!(self, Takes::Size(_) | Takes::Depth(_) | Takes::Steps(_) | Takes::Cells(_) | Takes::Picture(_))
     }
 }
 
@@ -249,6 +272,66 @@ pub static FLAGS: &[Flag] = &[
         .help("the course's optional count colouring: the same as -visualize_grid"),
     Flag::course("stats", "", Takes::Switch(|g| g.stats = true), Verbs::of(&[Render]))
         .help("print the course's ray tracing statistics on stdout at the end"),
+    Flag::course(
+        "random_samples",
+        "N",
+        Takes::Samples { square: false, set: |g, n| g.sampler = Some(Sampler::Random(n)) },
+        RENDER_VERBS,
+    )
+    .help("N samples per pixel at hashed random positions (see --seed)"),
+    Flag::course(
+        "uniform_samples",
+        "N",
+        Takes::Samples { square: true, set: |g, n| g.sampler = Some(Sampler::Uniform(n)) },
+        RENDER_VERBS,
+    )
+    .help("N samples per pixel on a √N×√N grid (N a square number)"),
+    Flag::course(
+        "jittered_samples",
+        "N",
+        Takes::Samples { square: true, set: |g, n| g.sampler = Some(Sampler::Jittered(n)) },
+        RENDER_VERBS,
+    )
+    .help("N samples per pixel, one at a hashed position in each cell of a\n√N×√N grid (N a square number)"),
+    Flag::course(
+        "box_filter",
+        "R",
+        Takes::Positive { what: "a radius", set: |g, r| g.filter = Some(Filter::Box(r)) },
+        RENDER_VERBS,
+    )
+    .help("each pixel the average of the samples within R pixels across\n(default with a sampler: R = 0.5, the pixel's own samples)"),
+    Flag::course(
+        "tent_filter",
+        "R",
+        Takes::Positive { what: "a radius", set: |g, r| g.filter = Some(Filter::Tent(r)) },
+        RENDER_VERBS,
+    )
+    .help("samples weighted 1 at the pixel's centre down to 0 at distance R"),
+    Flag::course(
+        "gaussian_filter",
+        "SIGMA",
+        Takes::Positive { what: "a sigma", set: |g, s| g.filter = Some(Filter::Gaussian(s)) },
+        RENDER_VERBS,
+    )
+    .help("samples weighted exp(-d²/2σ²), none beyond 2σ"),
+    Flag::course(
+        "render_samples",
+        "FILE ZOOM",
+        Takes::Picture(|g, p| g.pictures.samples = Some(p)),
+        Verbs::of(&[Render]),
+    )
+    .once()
+    .help("the samples' picture: each pixel enlarged ZOOM times, a dot of\nits colour at each sample"),
+    Flag::course("render_filter", "FILE ZOOM", Takes::Picture(|g, p| g.pictures.filter = Some(p)), Verbs::of(&[Render]))
+        .once()
+        .help("the filter's picture: its weights around the centre pixel,\nenlarged ZOOM times"),
+    Flag::ours(
+        "seed",
+        "N",
+        Takes::Number { what: "a seed", min: 0, max: u32::MAX as u64, set: |g, n| g.seed = Some(n as u32) },
+        RENDER_VERBS,
+    )
+    .help("the seed of random and jittered sample positions (default 0)"),
     Flag::ours("specular_fix", "", Takes::Switch(|g| g.shading.specular_fix = true), RENDER_VERBS).help(
         "the handout's optional specular fix: the specular term times\n\
          N·L",

@@ -19,6 +19,7 @@ pub use prepared::{Hit, ReferenceScene, SceneGrid, Surface};
 
 use crate::camera::{PrimaryRays, Ray};
 use crate::render::{Frame, Output, Pixel, RayStats, RenderOptions};
+use crate::sampling::Sampling;
 use crate::scene::{Light, Material, Scene};
 use glam::DVec3;
 use rayon::prelude::*;
@@ -80,7 +81,13 @@ impl<'a> Reference<'a> {
     }
 
     /// Image rows `first_row .. first_row + rows` (from the top) as a frame of full rows.
+    /// With sampling, each pixel filters the samples of the pixels within the filter's
+    /// support (docs/SPEC.md §8), rows outside the band included: a band is the same
+    /// whichever tiles or bands the image is cut into.
     pub fn rows(&self, first_row: u32, rows: u32) -> Frame {
+        if let Some(sampling) = self.options.sampling {
+            return self.filtered_rows(&sampling, first_row, rows);
+        }
         let width = self.options.width;
         let pixels: Vec<(u32, u32)> =
             (first_row..first_row + rows).flat_map(|row| (0..width).map(move |i| (i, row))).collect();
@@ -94,8 +101,33 @@ impl<'a> Reference<'a> {
         Frame::from_pixels(&one_row, self.render_pixels(pixels))
     }
 
-    /// The listed pixels' results, in that order, rendered in parallel.
+    /// The listed pixels' results, in that order, rendered in parallel. With sampling, each
+    /// pixel filters its own and its neighbours' samples (traced for it alone).
     fn render_pixels(&self, pixels: &[(u32, u32)]) -> Vec<Pixel> {
+        if let Some(sampling) = self.options.sampling {
+            // Every pixel whose samples a listed pixel's filter reads, traced once.
+            let (r, width, height) = (sampling.radius(), self.options.width, self.options.height);
+            let mut needed: Vec<(u32, u32)> = pixels
+                .iter()
+                .flat_map(|&(i, row)| {
+                    let rows = row.saturating_sub(r)..(row + 1).saturating_add(r).min(height);
+                    rows.flat_map(move |row2| {
+                        (i.saturating_sub(r)..(i + 1).saturating_add(r).min(width)).map(move |i2| (i2, row2))
+                    })
+                })
+                .collect();
+            needed.sort_unstable();
+            needed.dedup();
+            let traced: Vec<Vec<((f64, f64), Pixel)>> = needed
+                .par_iter()
+                .map(|&(i2, row2)| self.samples(&sampling, i2, height - 1 - row2, &mut RayStats::default()))
+                .collect();
+            let at = |i2: u32, row2: u32| {
+                let k = needed.binary_search(&(i2, row2)).expect("every neighbour was traced");
+                &traced[k][..]
+            };
+            return pixels.par_iter().map(|&(i, row)| self.filtered_pixel(&sampling, i, row, at)).collect();
+        }
         pixels
             .par_iter()
             .map(|&(i, row)| {
@@ -108,9 +140,92 @@ impl<'a> Reference<'a> {
             .collect()
     }
 
+    /// The samples of pixel (i from the left, j from the bottom), in their order
+    /// (docs/SPEC.md §8), each with its pixel-local position.
+    pub fn samples(&self, sampling: &Sampling, i: u32, j: u32, stats: &mut RayStats) -> Vec<((f64, f64), Pixel)> {
+        (0..sampling.count())
+            .map(|k| {
+                let position = sampling.position(i, j, k);
+                (position, self.pixel_at(self.rays.ray_at(i, j, position), stats))
+            })
+            .collect()
+    }
+
+    /// docs/SPEC.md §8: rows `first_row .. first_row + rows` (from the top), each pixel the
+    /// filtered samples of the pixels within the support radius, cropped at the image's
+    /// border. Statistics count the samples of the band's own pixels only.
+    fn filtered_rows(&self, sampling: &Sampling, first_row: u32, rows: u32) -> Frame {
+        let (width, height) = (self.options.width, self.options.height);
+        let radius = sampling.radius();
+        let top = first_row.saturating_sub(radius);
+        let bottom = (first_row + rows).saturating_add(radius).min(height);
+        let band = first_row..first_row + rows;
+        let pixels: Vec<(u32, u32)> = (top..bottom).flat_map(|row| (0..width).map(move |i| (i, row))).collect();
+        let samples: Vec<Vec<((f64, f64), Pixel)>> = pixels
+            .par_iter()
+            .map(|&(i, row)| {
+                let mut stats = RayStats::default();
+                let samples = self.samples(sampling, i, height - 1 - row, &mut stats);
+                if band.contains(&row) {
+                    self.stats.lock().unwrap_or_else(|e| e.into_inner()).add(&stats);
+                }
+                samples
+            })
+            .collect();
+        let at = |i: u32, row: u32| &samples[(row - top) as usize * width as usize + i as usize];
+        let out: Vec<(u32, u32)> = band.clone().flat_map(|row| (0..width).map(move |i| (i, row))).collect();
+        let filtered: Vec<Pixel> = out
+            .par_iter()
+            .map(|&(i, row)| self.filtered_pixel(sampling, i, row, |i2, row2| &at(i2, row2)[..]))
+            .collect();
+        Frame::from_pixels(&RenderOptions { height: rows, ..self.options }, filtered)
+    }
+
+    /// docs/SPEC.md §8: pixel (i, row from the top) from the samples `at(i2, row2)` of the
+    /// pixels within the support radius, cropped at the image's border.
+    fn filtered_pixel<'s>(
+        &self,
+        sampling: &Sampling,
+        i: u32,
+        row: u32,
+        at: impl Fn(u32, u32) -> &'s [((f64, f64), Pixel)],
+    ) -> Pixel {
+        let (width, height) = (self.options.width as i64, self.options.height as i64);
+        let r = sampling.radius() as i64;
+        let mut sum = FilterSum::default();
+        for dr in -r..=r {
+            let row2 = row as i64 + dr;
+            if row2 < 0 || row2 >= height {
+                continue;
+            }
+            for di in -r..=r {
+                let i2 = i as i64 + di;
+                if i2 < 0 || i2 >= width {
+                    continue;
+                }
+                // Rows run down the image; the sample's y runs up.
+                for &((sx, sy), sample) in at(i2 as u32, row2 as u32) {
+                    let (dx, dy) = (di as f64 + sx - 0.5, -dr as f64 + sy - 0.5);
+                    sum.add(sampling.filter.weight(dx, dy), &sample);
+                }
+            }
+        }
+        if sum.weight == 0.0 {
+            // No sample weighs (a filter narrower than the gaps between samples): the plain
+            // average of the pixel's own.
+            sum = FilterSum::default();
+            at(i, row).iter().for_each(|(_, sample)| sum.add(1.0, sample));
+        }
+        sum.pixel()
+    }
+
     /// Pixel (i from the left, j from the bottom): the kernel's stages, in its order.
     fn pixel(&self, i: u32, j: u32, stats: &mut RayStats) -> Pixel {
-        let ray = self.primary_ray(i, j); // §3
+        self.pixel_at(self.primary_ray(i, j), stats)
+    }
+
+    /// What the primary ray `ray` sees: the kernel's stages, in its order.
+    fn pixel_at(&self, ray: Ray, stats: &mut RayStats) -> Pixel {
         stats.non_shadow_rays += 1;
         if let Some(grid) = self.prepared.grid().filter(|_| self.options.visualize_grid) {
             return self.voxel_pixel(grid, &ray, stats); // §7
@@ -290,6 +405,43 @@ pub fn voxel_color(count: usize) -> DVec3 {
     // ⌈log₂ count⌉ − 1, at least 0: 1 and 2 → 0, 3 and 4 → 1, 5…8 → 2, …
     let band = (count.max(2) - 1).ilog2() as usize;
     BANDS[band.min(BANDS.len() - 1)]
+}
+
+/// A filtered pixel being summed (docs/SPEC.md §8): Σw·colour over every sample, and
+/// Σw·normal and Σw·t over the samples that hit, in f64.
+#[derive(Default)]
+struct FilterSum {
+    weight: f64,
+    color: DVec3,
+    hit_weight: f64,
+    normal: DVec3,
+    depth: f64,
+}
+
+impl FilterSum {
+    fn add(&mut self, w: f64, sample: &Pixel) {
+        let v = |a: [f32; 3]| DVec3::from(a.map(f64::from));
+        self.weight += w;
+        self.color += w * v(sample.color);
+        if sample.hit {
+            self.hit_weight += w;
+            self.normal += w * v(sample.normal);
+            self.depth += w * sample.depth as f64;
+        }
+    }
+
+    /// The weighted averages; the pixel is a hit where the samples that hit carry at least
+    /// half of the weight, and then shows their filtered normal and t.
+    fn pixel(&self) -> Pixel {
+        let hit = self.hit_weight > 0.0 && 2.0 * self.hit_weight >= self.weight;
+        let per_hit = if self.hit_weight > 0.0 { 1.0 / self.hit_weight } else { 0.0 };
+        Pixel {
+            hit,
+            color: (self.color / self.weight).as_vec3().to_array(),
+            normal: if hit { (self.normal * per_hit).as_vec3().to_array() } else { [0.0; 3] },
+            depth: if hit { (self.depth * per_hit) as f32 } else { 0.0 },
+        }
+    }
 }
 
 /// A hit about to be shaded: its surface, the normal turned towards the viewer, and

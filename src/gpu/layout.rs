@@ -40,6 +40,32 @@ pub struct Params {
     pub _pad: u32,
 }
 
+/// WGSL `Sampling` (shaders/sampling.wgsl): the sampler, the filter, and the rows of samples
+/// one tile holds (docs/SPEC.md §8).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuSampling {
+    pub count: u32,
+    pub side: u32,
+    pub seed: u32,
+    /// [`crate::sampling::Sampler::kind`].
+    pub kind: u32,
+    /// [`crate::sampling::Filter::kind`].
+    pub filter_kind: u32,
+    /// The filter's support radius in pixels.
+    pub radius: u32,
+    /// The filter's radius or σ.
+    pub parameter: f32,
+    /// The first image row (from the top) of the tile's samples, and how many rows.
+    pub first_row: u32,
+    pub rows: u32,
+    pub _pad: [u32; 3],
+}
+
+/// Words of one sample in the kernel's `samples` buffer (WGSL `SAMPLE_WORDS`): flags, colour,
+/// normal, t.
+pub const SAMPLE_WORDS: u32 = 8;
+
 /// How many times the kernel's canary loop runs (WGSL `loops_were_cut`): twice, unless the
 /// driver's loop limit was reached, after which lavapipe lets every loop run one pass and
 /// no more (docs/lavapipe.md).

@@ -155,6 +155,21 @@ pub struct KernelConfig {
     pub stats: bool,
     /// `-visualize_grid`: draw the grid's occupied cells (`shaders/voxels.wgsl`).
     pub voxels: bool,
+    /// Which of the kernel's passes this pipeline runs.
+    pub stage: Stage,
+}
+
+/// The kernel's passes: one pass for a pixel's centre sample, or, with sampling
+/// (docs/SPEC.md §8), a pass tracing every sample and a pass filtering them.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Stage {
+    /// `main` or `main_bins`: one sample per pixel, at its centre.
+    #[default]
+    Pixels,
+    /// `main_samples`: one invocation per sample.
+    Samples,
+    /// `main_filter`: one invocation per output pixel, reading the samples.
+    Filter,
 }
 
 impl KernelConfig {
@@ -192,6 +207,7 @@ impl KernelConfig {
             textures: !buffers.textures.is_empty(),
             stats: options.stats,
             voxels: options.visualize_grid,
+            stage: Stage::Pixels,
         };
         // Every pixel, whatever it casts: a hierarchy that cannot cull (slivers across the
         // view), a crowded bin, a flat loop or a texture's blend passes the limit.
@@ -211,6 +227,11 @@ impl KernelConfig {
 
     /// The kernel's entry point: `main_bins` renders packets from bins, `main` one pixel.
     pub fn entry_point(&self) -> &'static str {
+        match self.stage {
+            Stage::Samples => return "main_samples",
+            Stage::Filter => return "main_filter",
+            Stage::Pixels => {}
+        }
         if self.use_bins {
             "main_bins"
         } else {
@@ -273,7 +294,7 @@ const fn binding<T>(name: &'static str, writable: bool) -> Binding {
 /// Every binding of the kernel (`shaders/params.wgsl`), index = `@binding`. The bind-group layout and
 /// every bind group are built from this table, and `tests/layout.rs` checks it against the
 /// shader's own declarations (names, order, access, element sizes).
-pub const BINDINGS: [Binding; 16] = [
+pub const BINDINGS: [Binding; 18] = [
     binding::<layout::Params>("params", false),
     binding::<layout::GpuSphere>("spheres", false),
     binding::<layout::GpuEllipsoid>("ellipsoids", false),
@@ -290,6 +311,8 @@ pub const BINDINGS: [Binding; 16] = [
     binding::<layout::GpuTexture>("textures", false),
     binding::<u32>("permutation", false),
     binding::<u32>("counters", true),
+    binding::<u32>("samples", true),
+    binding::<layout::GpuSampling>("sampling", false),
 ];
 
 /// Kernels a renderer keeps compiled (see [`GpuRenderer::pipeline`]).
@@ -300,6 +323,14 @@ const OUTPUT_BINDING: usize = 7;
 
 /// The `@binding` of the `-stats` counters (`counters`).
 const COUNTERS_BINDING: usize = 15;
+
+/// The `@binding`s of the samples of a tile and of their parameters (per slot, like the
+/// output).
+const SAMPLES_BINDING: usize = 16;
+const SAMPLING_BINDING: usize = 17;
+
+/// The most bytes of samples one tile holds (the overlap rows of the filter included).
+pub const MAX_SAMPLE_BYTES: u64 = 64 << 20;
 
 /// A wgpu device with the ray-casting kernel, ready to render scenes.
 pub struct GpuRenderer {

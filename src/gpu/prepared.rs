@@ -6,11 +6,15 @@
 //! (decoding, quantising, writing files) overlaps the device's instead of following it.
 
 use super::flatten::{GridChoice, SceneBuffers};
-use super::layout::{Handover, Params, PixelLayout, PACKED_MISS, PERLIN_PERMUTATION, STATS_SLOTS, STATS_WORDS};
+use super::layout::{
+    GpuSampling, Handover, Params, PixelLayout, PACKED_MISS, PERLIN_PERMUTATION, SAMPLE_WORDS, STATS_SLOTS, STATS_WORDS,
+};
 use super::{
-    GpuError, GpuRenderer, KernelConfig, RenderStats, Timer, BINDINGS, COUNTERS_BINDING, OUTPUT_BINDING, WORKGROUP,
+    GpuError, GpuRenderer, KernelConfig, RenderStats, Stage, Timer, BINDINGS, COUNTERS_BINDING, MAX_SAMPLE_BYTES,
+    OUTPUT_BINDING, SAMPLES_BINDING, SAMPLING_BINDING, WORKGROUP,
 };
 use crate::render::{row_tiles, Frame, Output, RayStats, RenderOptions};
+use crate::sampling::Sampling;
 use crate::scene::Scene;
 use std::sync::mpsc::sync_channel;
 use wgpu::util::DeviceExt;
@@ -33,6 +37,8 @@ pub struct PreparedScene<'a> {
     fallback: Option<Scene>,
     /// The kernel's `-stats` counts, shared by every tile (bound to every slot).
     counters: Counters,
+    /// With sampling: the passes that trace the samples and filter them.
+    sampled: Option<Sampled>,
 }
 
 /// The `counters` binding: [`STATS_SLOTS`] slots of [`STATS_WORDS`] words, with a buffer to
@@ -42,9 +48,18 @@ struct Counters {
     readback: Option<wgpu::Buffer>,
 }
 
+/// The two passes of a render with several samples per pixel (docs/SPEC.md §8).
+struct Sampled {
+    sampling: Sampling,
+    samples: wgpu::ComputePipeline,
+    filter: wgpu::ComputePipeline,
+}
+
 /// The buffers one tile in flight uses.
 struct Slot {
     params: wgpu::Buffer,
+    /// The tile's samples and their parameters (a word each without sampling).
+    sampling: wgpu::Buffer,
     output: wgpu::Buffer,
     readback: wgpu::Buffer,
     bind_group: wgpu::BindGroup,
@@ -80,7 +95,10 @@ impl<'a> PreparedScene<'a> {
             true => GridChoice::Given(super::voxels::voxel_grid(scene, size, rays.center)),
             false => GridChoice::Walk(size),
         });
-        let buffers = SceneBuffers::new(scene, &rays, &gpu.options, secondary_rays, grid);
+        // Screen-space bins list what the rays through the pixels' centres can meet: samples
+        // elsewhere in the pixel walk the hierarchy, as secondary rays do.
+        let off_centre = secondary_rays || options.sampling.is_some();
+        let buffers = SceneBuffers::new(scene, &rays, &gpu.options, off_centre, grid);
         let flat = buffers.bins.is_none() && buffers.bvh.is_none() && buffers.grid.is_none();
         let primitives =
             buffers.spheres.len() + buffers.ellipsoids.len() + buffers.planes.len() + buffers.triangles.len();
@@ -93,11 +111,39 @@ impl<'a> PreparedScene<'a> {
         let config = KernelConfig::new(&buffers, layout, options, &tree, gpu.loop_limit().is_some());
         let pipeline = gpu.pipeline(config);
         let inputs = upload_inputs(gpu, &buffers)?;
-        let tile_rows = gpu.tile_rows(options.width, &layout)?;
+        let mut tile_rows = gpu.tile_rows(options.width, &layout)?;
+        let mut sample_bytes = 4;
+        let sampled = match options.sampling {
+            None => None,
+            Some(sampling) => {
+                // A tile's samples: its rows and the filter's overlap above and below.
+                let row_bytes = options.width as u64 * sampling.count() as u64 * SAMPLE_WORDS as u64 * 4;
+                let overlap = 2 * sampling.radius() as u64;
+                let budget = gpu.limits.max_storage_buffer_binding_size.min(gpu.limits.max_buffer_size);
+                if row_bytes * (1 + overlap) > budget {
+                    return Err(GpuError::Unsupported(super::support::UnsupportedError {
+                        file: scene.path.clone(),
+                        location: None,
+                        what: format!(
+                            "{} {} at {} pixels across: one row of samples and the filter's {overlap} rows around it exceed the adapter's storage binding limit of {budget} bytes",
+                            sampling.sampler.flag(),
+                            sampling.count(),
+                            options.width
+                        ),
+                    }));
+                }
+                let rows = (MAX_SAMPLE_BYTES.min(budget) / row_bytes).saturating_sub(overlap).max(1);
+                tile_rows = tile_rows.min(rows as u32);
+                sample_bytes = row_bytes * (tile_rows as u64 + overlap).min(options.height as u64);
+                let stage = |stage| gpu.pipeline(KernelConfig { stage, ..config });
+                Some(Sampled { sampling, samples: stage(Stage::Samples), filter: stage(Stage::Filter) })
+            }
+        };
         let tiles = options.height.div_ceil(tile_rows);
         let tile_bytes = options.width as u64 * tile_rows as u64 * layout.words() as u64 * 4;
         let counters = Counters::new(gpu, options.stats);
-        let slots = (0..tiles.min(2)).map(|_| Slot::new(gpu, &inputs, &counters.buffer, tile_bytes)).collect();
+        let slots =
+            (0..tiles.min(2)).map(|_| Slot::new(gpu, &inputs, &counters.buffer, tile_bytes, sample_bytes)).collect();
         let scene_bytes = inputs.iter().flatten().map(|b| b.size()).sum();
         Ok(PreparedScene {
             gpu,
@@ -127,6 +173,7 @@ impl<'a> PreparedScene<'a> {
             },
             fallback: (config.loop_canary || config.textures).then(|| scene.clone()),
             counters,
+            sampled,
         })
     }
 
@@ -281,11 +328,42 @@ impl<'a> PreparedScene<'a> {
             });
             let mut pass =
                 encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("raycast"), timestamp_writes });
-            pass.set_pipeline(&self.pipeline);
             pass.set_bind_group(0, &s.bind_group, &[]);
-            // Packets start at the tile's first row rounded down to a multiple of PACKET.
-            let packets = (first_row % self.packet + rows).div_ceil(self.packet);
-            pass.dispatch_workgroups(self.options.width.div_ceil(WORKGROUP), packets.div_ceil(WORKGROUP), 1);
+            let columns = self.options.width.div_ceil(WORKGROUP);
+            match &self.sampled {
+                None => {
+                    pass.set_pipeline(&self.pipeline);
+                    // Packets start at the tile's first row rounded down to a multiple of PACKET.
+                    let packets = (first_row % self.packet + rows).div_ceil(self.packet);
+                    pass.dispatch_workgroups(columns, packets.div_ceil(WORKGROUP), 1);
+                }
+                Some(sampled) => {
+                    // Every sample of the tile's rows and of the rows the filter reads around
+                    // them, then each pixel from them (the two dispatches are ordered: wgpu
+                    // puts a barrier between a pass's dispatches that write and read a buffer).
+                    let sampling = &sampled.sampling;
+                    let radius = sampling.radius();
+                    let sample_first = first_row.saturating_sub(radius);
+                    let sample_rows = (first_row + rows).saturating_add(radius).min(self.options.height) - sample_first;
+                    let header = GpuSampling {
+                        count: sampling.count(),
+                        side: sampling.sampler.side(),
+                        seed: sampling.seed,
+                        kind: sampling.sampler.kind(),
+                        filter_kind: sampling.filter.kind(),
+                        radius,
+                        parameter: sampling.filter.parameter() as f32,
+                        first_row: sample_first,
+                        rows: sample_rows,
+                        _pad: [0; 3],
+                    };
+                    gpu.queue.write_buffer(&s.sampling, 0, bytemuck::bytes_of(&header));
+                    pass.set_pipeline(&sampled.samples);
+                    pass.dispatch_workgroups(columns, sample_rows.div_ceil(WORKGROUP), sampling.count());
+                    pass.set_pipeline(&sampled.filter);
+                    pass.dispatch_workgroups(columns, rows.div_ceil(WORKGROUP), 1);
+                }
+            }
         }
         encoder.copy_buffer_to_buffer(&s.output, 0, &s.readback, 0, size);
         if let Some(timer) = &s.timer {
@@ -306,6 +384,7 @@ impl Slot {
         inputs: &[Option<wgpu::Buffer>; BINDINGS.len()],
         counters: &wgpu::Buffer,
         tile_bytes: u64,
+        sample_bytes: u64,
     ) -> Slot {
         let buffer = |label, size, usage| {
             gpu.device.create_buffer(&wgpu::BufferDescriptor {
@@ -319,12 +398,16 @@ impl Slot {
         let params = buffer("params", std::mem::size_of::<Params>() as u64, U::STORAGE | U::COPY_DST);
         let output = buffer("pixels", tile_bytes, U::STORAGE | U::COPY_SRC);
         let readback = buffer("readback", tile_bytes, U::MAP_READ | U::COPY_DST);
+        let samples = buffer("samples", sample_bytes, U::STORAGE);
+        let sampling = buffer("sampling", std::mem::size_of::<GpuSampling>() as u64, U::STORAGE | U::COPY_DST);
         let entries: Vec<_> = (0..BINDINGS.len())
             .map(|k| {
                 let resource = match k {
                     0 => &params,
                     OUTPUT_BINDING => &output,
                     COUNTERS_BINDING => counters,
+                    SAMPLES_BINDING => &samples,
+                    SAMPLING_BINDING => &sampling,
                     _ => inputs[k].as_ref().expect("every input binding is uploaded"),
                 };
                 wgpu::BindGroupEntry { binding: k as u32, resource: resource.as_entire_binding() }
@@ -336,7 +419,7 @@ impl Slot {
             entries: &entries,
         });
         let timer = gpu.timestamps.then(|| Timer::new(&gpu.device));
-        Slot { params, output, readback, bind_group, timer }
+        Slot { params, sampling, output, readback, bind_group, timer }
     }
 }
 
@@ -416,6 +499,8 @@ fn upload_inputs(
         Some(non_empty(bins.map_or(&[][..], |b| &b.items))),
         Some(non_empty(&buffers.textures)),
         Some(non_empty(if buffers.textures.is_empty() { &[][..] } else { &PERLIN_PERMUTATION[..] })),
+        None,
+        None,
         None,
     ];
     let mut out: [Option<wgpu::Buffer>; BINDINGS.len()] = Default::default();

@@ -26,12 +26,14 @@ use std::sync::OnceLock;
 ///   and where rays leaving it start, solid textures (Perlin's improved noise), its directly
 ///   lit colour, the reflected and refracted rays' colours, the words it leaves in the
 ///   output;
-/// - `entry.wgsl`: `main` and `main_bins`.
+/// - `entry.wgsl`: `main` and `main_bins`;
+/// - `sampling.wgsl`, `filter.wgsl`: with sampling (docs/SPEC.md §8), the samples' positions
+///   and `main_samples`, then the filters and `main_filter`.
 ///
 /// Plain concatenation, not a composer such as naga_oil: nothing is resolved at run time,
 /// no dependency is added, and naga sees one module as it did when the kernel was one file
 /// (lavapipe's compile time, measured with an empty shader cache, did not change).
-pub const FILES: [(&str, &str); 20] = [
+pub const FILES: [(&str, &str); 22] = [
     ("params.wgsl", include_str!("../../shaders/params.wgsl")),
     ("stats.wgsl", include_str!("../../shaders/stats.wgsl")),
     ("ray.wgsl", include_str!("../../shaders/ray.wgsl")),
@@ -52,6 +54,8 @@ pub const FILES: [(&str, &str); 20] = [
     ("tree.wgsl", include_str!("../../shaders/tree.wgsl")),
     ("output.wgsl", include_str!("../../shaders/output.wgsl")),
     ("entry.wgsl", include_str!("../../shaders/entry.wgsl")),
+    ("sampling.wgsl", include_str!("../../shaders/sampling.wgsl")),
+    ("filter.wgsl", include_str!("../../shaders/filter.wgsl")),
 ];
 
 /// The constants the host owns, as WGSL `const`s: sizes that must agree with how the host

@@ -1,0 +1,103 @@
+// Supersampling (docs/SPEC.md §8): where a pixel's samples lie, the same positions as
+// raycaster::sampling on the host, and the entry point that traces one sample per
+// invocation. Reached only from `main_samples` and `main_filter`: a render without
+// sampling compiles none of it.
+
+// gpu::layout::GpuSampling: the sampler, the filter and the rows of samples a tile holds.
+struct Sampling {
+    // Samples per pixel, the side of the regular patterns' grid, the seed, and the pattern
+    // (raycaster::sampling::Sampler::kind: 0 uniform, 1 random, 2 jittered).
+    count: u32,
+    side: u32,
+    seed: u32,
+    kind: u32,
+    // raycaster::sampling::Filter::kind (0 box, 1 tent, 2 gaussian), its support radius in
+    // pixels and its radius or sigma.
+    filter_kind: u32,
+    radius: u32,
+    parameter: f32,
+    // The first image row (from the top) of the samples in `samples`, and how many rows.
+    first_row: u32,
+    rows: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
+}
+
+// Words of one sample in `samples`: flags (1 hit, 2 its loops cut short, 4 a texture
+// blended beyond its reach: the host renders the pixels it reaches again), colour, normal, t.
+const SAMPLE_WORDS: u32 = 8u;
+
+// The bindings `samples` and `sampling` are in params.wgsl, with the others.
+
+// PCG's output hash (Jarzynski & Olano 2020), raycaster::sampling::pcg.
+fn pcg(v: u32) -> u32 {
+    let state = v * 747796405u + 2891336453u;
+    let word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
+    return (word >> 22u) ^ word;
+}
+
+// A hashed word as a number in [0, 1): its top 24 bits times 2^-24, exact in f32.
+fn unit(u: u32) -> f32 {
+    return f32(u >> 8u) * (1.0 / 16777216.0);
+}
+
+// Sample k of pixel (i from the left, j from the bottom), pixel-local in [0, 1)², y up:
+// raycaster::sampling::Sampler::position.
+fn sample_position(i: u32, j: u32, k: u32) -> vec2<f32> {
+    let m = sampling.side;
+    let cell = vec2<f32>(f32(k % m), f32(k / m));
+    if (sampling.kind == 0u) {
+        return (cell + 0.5) / f32(m);
+    }
+    let h = pcg(pcg(pcg(pcg(sampling.seed) + i) + j) + k);
+    let offset = vec2<f32>(unit(h), unit(pcg(h)));
+    if (sampling.kind == 1u) {
+        return offset;
+    }
+    return (cell + offset) / f32(m);
+}
+
+// The ray through the point p (pixel-local, y up) of pixel (i, j): camera::PrimaryRays::ray_at.
+fn primary_ray_at(i: u32, j: u32, p: vec2<f32>) -> Ray {
+    let longer = f32(max(P.width, P.height));
+    let x = (f32(i) + p.x - 0.5 * f32(P.width)) / longer;
+    let y = (f32(j) + p.y - 0.5 * f32(P.height)) / longer;
+    let offset = x * P.horizontal + y * P.up;
+    if (ORTHOGRAPHIC) {
+        return Ray(offset, P.direction);
+    }
+    return Ray(vec3<f32>(0.0), normalize(P.direction + offset));
+}
+
+// One sample per invocation: x the column, y the row of samples, z the sample's index.
+// Neighbouring invocations trace the same sample of neighbouring pixels, rays a pixel apart.
+@compute @workgroup_size(WORKGROUP, WORKGROUP)
+fn main_samples(@builtin(global_invocation_id) id: vec3<u32>) {
+    P = params;
+    let i = id.x;
+    let r = id.y;
+    let k = id.z;
+    if (i >= P.width || r >= sampling.rows || k >= sampling.count) {
+        return;
+    }
+    let j = P.height - 1u - (sampling.first_row + r);
+    let ray = primary_ray_at(i, j, sample_position(i, j, k));
+    let shaded = shade_pixel(ray, closest_hit(ray, t_min()));
+    let cut = LOOP_CANARY && loops_were_cut();
+    let w = ((r * P.width + i) * sampling.count + k) * SAMPLE_WORDS;
+    samples[w] = select(0u, 1u, shaded.hit) | select(0u, 2u, cut) | select(0u, 4u, shaded.beyond_reach);
+    samples[w + 1u] = bitcast<u32>(shaded.color.x);
+    samples[w + 2u] = bitcast<u32>(shaded.color.y);
+    samples[w + 3u] = bitcast<u32>(shaded.color.z);
+    samples[w + 4u] = bitcast<u32>(shaded.normal.x);
+    samples[w + 5u] = bitcast<u32>(shaded.normal.y);
+    samples[w + 6u] = bitcast<u32>(shaded.normal.z);
+    samples[w + 7u] = bitcast<u32>(shaded.t);
+    // -stats: a row of the filter's overlap is traced again as a row of its own tile, and
+    // counted there; a sample cut short, by the reference that renders its pixels again.
+    let image_row = sampling.first_row + r;
+    if (!cut && image_row >= P.first_row && image_row < P.first_row + P.tile_rows) {
+        flush_counts(stats_slot(id));
+    }
+}
