@@ -186,6 +186,9 @@ pub struct GpuTexture {
 }
 
 impl GpuTexture {
+    /// `kind` of a checkerboard.
+    pub const CHECKERBOARD: u32 = 1;
+
     /// Material `texture`'s entry (zeros for a Phong material) for a camera at `camera`;
     /// `spawns`: whether a material it blends reflects or refracts.
     pub fn new(texture: Option<&crate::scene::Texture>, camera: glam::DVec3, spawns: bool) -> GpuTexture {
@@ -198,7 +201,7 @@ impl GpuTexture {
             row1: row(1),
             row2: row(2),
             kind: match texture.kind {
-                TextureKind::Checkerboard => 1,
+                TextureKind::Checkerboard => GpuTexture::CHECKERBOARD,
                 TextureKind::Noise => 2,
                 TextureKind::Marble => 3,
                 TextureKind::Wood => 4,

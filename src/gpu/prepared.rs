@@ -7,7 +7,8 @@
 
 use super::flatten::{GridChoice, SceneBuffers};
 use super::layout::{
-    GpuSampling, Handover, Params, PixelLayout, PACKED_MISS, PERLIN_PERMUTATION, SAMPLE_WORDS, STATS_SLOTS, STATS_WORDS,
+    GpuSampling, GpuTexture, Handover, Params, PixelLayout, PACKED_MISS, PERLIN_PERMUTATION, SAMPLE_WORDS, STATS_SLOTS,
+    STATS_WORDS,
 };
 use super::{
     GpuError, GpuRenderer, KernelConfig, RenderStats, Stage, Timer, BINDINGS, COUNTERS_BINDING, MAX_SAMPLE_BYTES,
@@ -98,7 +99,13 @@ impl<'a> PreparedScene<'a> {
         // Screen-space bins list what the rays through the pixels' centres can meet: samples
         // elsewhere in the pixel walk the hierarchy, as secondary rays do.
         let off_centre = secondary_rays || options.sampling.is_some();
-        let buffers = SceneBuffers::new(scene, &rays, &gpu.options, off_centre, grid);
+        let mut buffers = SceneBuffers::new(scene, &rays, &gpu.options, off_centre, grid);
+        if let Some(sampling) = options.sampling {
+            let samples = super::texture_range::checker_samples_per_pixel(&sampling) as f32;
+            for texture in buffers.textures.iter_mut().filter(|t| t.kind == GpuTexture::CHECKERBOARD) {
+                texture.reach /= samples;
+            }
+        }
         let flat = buffers.bins.is_none() && buffers.bvh.is_none() && buffers.grid.is_none();
         let primitives =
             buffers.spheres.len() + buffers.ellipsoids.len() + buffers.planes.len() + buffers.triangles.len();
