@@ -531,3 +531,86 @@ fn make_readable(_: &std::fs::File) -> std::io::Result<()> {
 pub fn read_image(path: &Path) -> Result<RgbImage, ImageError> {
     image::open(path).map(|i| i.to_rgb8()).map_err(|e| ImageError { path: path.to_path_buf(), message: e.to_string() })
 }
+
+// The course's pictures of assignment 7 (docs/SPEC.md §8), drawn from the sampling's
+// positions and weights: images, so here beside the other images and their quantisation.
+
+/// The course's `Film::renderFilter` picture: the weights the filter gives around the
+/// centre pixel (column and row ⌊W/2⌋) of a `width × height` image, each pixel within the
+/// support radius enlarged `zoom` times, on a dark blue ground (0, 0, ½) with a blue grid
+/// (0, 0, 1) on the pixel borders; `(W·zoom + 1) × (H·zoom + 1)`, RGB rows from the top.
+/// The weight drawn at sub-pixel (i2, j2) of pixel (i, j) is the one at the sub-pixel's
+/// lower left corner, (i + i2/zoom − c − ½, j + j2/zoom − c − ½), not normalised.
+pub fn filter_picture(filter: crate::sampling::Filter, width: u32, height: u32, zoom: u32) -> image::RgbImage {
+    let (w, h) = (width * zoom + 1, height * zoom + 1);
+    let mut picture = image::RgbImage::from_pixel(w, h, image::Rgb([0, 0, quantize(0.5)]));
+    let radius = filter.support_radius() as i64;
+    // The course centres both axes on width / 2.
+    let center = (width / 2) as i64;
+    let mut set = |x: u32, y: u32, rgb: [f32; 3]| {
+        // y counts from the bottom, as the course's image does.
+        picture.put_pixel(x, h - 1 - y, image::Rgb(rgb.map(quantize)));
+    };
+    for i in (center - radius)..=(center + radius) {
+        for j in (center - radius)..=(center + radius) {
+            if i < 0 || j < 0 || i >= width as i64 || j >= height as i64 {
+                continue;
+            }
+            for i2 in 0..zoom {
+                for j2 in 0..zoom {
+                    let x = i as f64 + i2 as f64 / zoom as f64 - (center as f64 + 0.5);
+                    let y = j as f64 + j2 as f64 / zoom as f64 - (center as f64 + 0.5);
+                    let weight = filter.weight(x, y) as f32;
+                    set(i as u32 * zoom + i2, j as u32 * zoom + j2, [weight; 3]);
+                }
+            }
+        }
+    }
+    for x in 0..w {
+        for y in 0..h {
+            if x % zoom == 0 || y % zoom == 0 {
+                set(x, y, [0.0, 0.0, 1.0]);
+            }
+        }
+    }
+    picture
+}
+
+/// One sample as the pictures need it: its pixel-local position and colour.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SampleDot {
+    pub position: (f64, f64),
+    pub color: [f32; 3],
+}
+
+/// The course's `Film::renderSamples` picture: the image plane enlarged `zoom` times, a
+/// checkerboard of dark grey (0.2) and black pixels, with a dot of the sample's colour at
+/// each sample, `(W·zoom) × (H·zoom)`, RGB rows from the top. `samples(i, j)` gives pixel
+/// (i from the left, j from the bottom)'s samples in order; a later sample on the same
+/// dot covers an earlier one.
+pub fn samples_picture(
+    width: u32,
+    height: u32,
+    zoom: u32,
+    samples: impl Fn(u32, u32) -> Vec<SampleDot>,
+) -> image::RgbImage {
+    let (w, h) = (width * zoom, height * zoom);
+    let mut picture = image::RgbImage::new(w, h);
+    let grey = quantize(0.2);
+    for i in 0..width {
+        for j in 0..height {
+            let ground = if (i + j) % 2 == 0 { [grey; 3] } else { [0; 3] };
+            for x in i * zoom..(i + 1) * zoom {
+                for y in j * zoom..(j + 1) * zoom {
+                    picture.put_pixel(x, h - 1 - y, image::Rgb(ground));
+                }
+            }
+            for dot in samples(i, j) {
+                let x = (((i as f64 + dot.position.0) * zoom as f64).floor() as u32).min(w - 1);
+                let y = (((j as f64 + dot.position.1) * zoom as f64).floor() as u32).min(h - 1);
+                picture.put_pixel(x, h - 1 - y, image::Rgb(dot.color.map(quantize)));
+            }
+        }
+    }
+    picture
+}

@@ -8,10 +8,11 @@ use crate::app::part::{self, Identity, PartHeader};
 use crate::app::progress::Progress;
 use crate::app::{cli, memory, validate};
 use raycaster::gpu::{GpuError, RenderStats};
+use raycaster::image_io::SampleDot;
 use raycaster::image_io::{self, ImageError, ImageFormat};
 use raycaster::metrics::OutputErrors;
 use raycaster::render::{Output, Outputs, RenderOptions};
-use raycaster::sampling::{SampleDot, Sampler, Sampling};
+use raycaster::sampling::{Sampler, Sampling};
 use raycaster::scene::{self, Scene, SceneError, SceneWarning};
 use std::fmt;
 use std::time::Instant;
@@ -272,7 +273,7 @@ fn pictures(scene: &Scene, args: &RenderArgs) -> Result<Vec<image_io::FinishedIm
     if let Some(picture) = &args.pictures.samples {
         let options = RenderOptions { outputs: Output::Color.into(), sampling: Some(sampling), ..options_for(args) };
         let reference = raycaster::cpu::Reference::new(scene, &options);
-        let image = raycaster::sampling::samples_picture(args.width, args.height, picture.zoom, |i, j| {
+        let image = raycaster::image_io::samples_picture(args.width, args.height, picture.zoom, |i, j| {
             reference
                 .samples(&sampling, i, j, &mut raycaster::render::RayStats::default())
                 .into_iter()
@@ -284,7 +285,7 @@ fn pictures(scene: &Scene, args: &RenderArgs) -> Result<Vec<image_io::FinishedIm
     if let Some(picture) = &args.pictures.filter {
         write(
             &picture.path,
-            raycaster::sampling::filter_picture(sampling.filter, args.width, args.height, picture.zoom),
+            raycaster::image_io::filter_picture(sampling.filter, args.width, args.height, picture.zoom),
         )?;
     }
     Ok(finished)
