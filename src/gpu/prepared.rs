@@ -14,6 +14,7 @@ use super::{
     GpuError, GpuRenderer, KernelConfig, RenderStats, Stage, Timer, BINDINGS, COUNTERS_BINDING, MAX_SAMPLE_BYTES,
     OUTPUT_BINDING, SAMPLES_BINDING, SAMPLING_BINDING, WORKGROUP,
 };
+use crate::cpu::Reference;
 use crate::render::{row_tiles, Frame, Output, RayStats, RenderOptions};
 use crate::sampling::Sampling;
 use crate::scene::Scene;
@@ -200,7 +201,8 @@ impl<'a> PreparedScene<'a> {
         assert!(first + rows <= self.options.height, "the band lies inside the image");
         let tiles: Vec<(u32, u32)> = row_tiles(rows, self.tile_rows).map(|(offset, n)| (first + offset, n)).collect();
         let mut stats = self.stats;
-        let mut counted = self.counters.zero(self.gpu);
+        let counted = self.counters.zero(self.gpu);
+        let again = RenderAgain::default();
         std::thread::scope(|scope| {
             let (ready_tx, ready_rx) = sync_channel(self.slots.len());
             let (free_tx, free_rx) = sync_channel::<usize>(self.slots.len());
@@ -222,12 +224,9 @@ impl<'a> PreparedScene<'a> {
             for _ in &tiles {
                 let (slot, first_row, rows, kernel_ns) =
                     ready_rx.recv().map_err(|e| GpuError::Readback(e.to_string()))??;
-                let handed = self.hand_over(slot, first_row, rows, &mut on_tile)?;
+                let handed = self.hand_over(slot, first_row, rows, &again, &mut on_tile)?;
                 stats.pixels_cut_short += handed.loops_cut;
                 stats.pixels_beyond_reach += handed.beyond_reach;
-                if let Some(counted) = &mut counted {
-                    counted.add(&handed.counted);
-                }
                 stats.kernel_ns = stats.kernel_ns.zip(kernel_ns).map(|(a, b)| a + b);
                 stats.tiles += 1;
                 // The submitter may already have finished; then nobody needs the slot back.
@@ -237,19 +236,24 @@ impl<'a> PreparedScene<'a> {
         })?;
         if let Some(mut counted) = counted {
             counted.add(&self.counters.read(self.gpu)?);
+            // The kernel counted the pixels beyond a texture's reach itself, having traced
+            // them to the end, and not those cut short, whose counts are the reference's.
+            if let Some(reference) = again.cut_short.get() {
+                counted.add(&reference.stats());
+            }
             stats.counted = Some(counted);
         }
         Ok(stats)
     }
 
     /// Shows the caller the mapped tile, its pixels handed over rendered again by the
-    /// reference, then gives the buffer back to the device; returns how many were, by why,
-    /// and what the reference counted rendering them (the kernel adds no count of theirs).
-    fn hand_over<E: From<GpuError>>(
-        &self,
+    /// reference, then gives the buffer back to the device; returns how many were, by why.
+    fn hand_over<'s, E: From<GpuError>>(
+        &'s self,
         slot: usize,
         first_row: u32,
         rows: u32,
+        again: &RenderAgain<'s>,
         on_tile: &mut impl FnMut(&ReadTile) -> Result<(), E>,
     ) -> Result<HandedOver, E> {
         let readback = &self.slots[slot].readback;
@@ -258,7 +262,8 @@ impl<'a> PreparedScene<'a> {
         let result = {
             let view = range.get_mapped_range().map_err(|e| GpuError::Readback(e.to_string()))?;
             let mapped: &[u32] = bytemuck::cast_slice(&view);
-            let patched = self.fallback.as_ref().and_then(|scene| self.rerender_handed_over(scene, first_row, mapped));
+            let patched =
+                self.fallback.as_ref().and_then(|scene| self.rerender_handed_over(scene, again, first_row, mapped));
             if let Some((_, counts)) = &patched {
                 handed = *counts;
             }
@@ -277,11 +282,14 @@ impl<'a> PreparedScene<'a> {
     }
 
     /// The tile's words with every pixel the kernel handed over replaced by the
-    /// reference's, how many those were, by why, and what the reference counted rendering
-    /// the pixels cut short; `None` when none was. The kernel counted (`-stats`) the pixels
-    /// beyond a texture's reach itself, having traced them to the end, and not those cut
-    /// short, whose counts are the reference's.
-    fn rerender_handed_over(&self, scene: &Scene, first_row: u32, words: &[u32]) -> Option<(Vec<u32>, HandedOver)> {
+    /// reference's, and how many those were, by why; `None` when none was.
+    fn rerender_handed_over<'s>(
+        &self,
+        scene: &'s Scene,
+        again: &RenderAgain<'s>,
+        first_row: u32,
+        words: &[u32],
+    ) -> Option<(Vec<u32>, HandedOver)> {
         let stride = self.layout.words() as usize;
         let width = self.options.width as usize;
         let (mut cut, mut beyond) = (Vec::new(), Vec::new());
@@ -295,23 +303,21 @@ impl<'a> PreparedScene<'a> {
         if cut.is_empty() && beyond.is_empty() {
             return None;
         }
-        let reference = crate::cpu::Reference::new(scene, &self.options);
         let mut out = words.to_vec();
-        let mut render_again = |marked: &[usize]| {
+        let mut render_again = |reference: &std::cell::OnceCell<Reference<'s>>, marked: &[usize]| {
             if marked.is_empty() {
                 return;
             }
             let pixels: Vec<(u32, u32)> =
                 marked.iter().map(|&k| ((k % width) as u32, first_row + (k / width) as u32)).collect();
-            let rendered = reference.pixels(&pixels);
+            let rendered = reference.get_or_init(|| Reference::new(scene, &self.options)).pixels(&pixels);
             for (n, &k) in marked.iter().enumerate() {
                 self.layout.encode(&rendered.pixel(n), &mut out[k * stride..(k + 1) * stride]);
             }
         };
-        render_again(&cut);
-        let counted = reference.stats();
-        render_again(&beyond);
-        Some((out, HandedOver { loops_cut: cut.len() as u64, beyond_reach: beyond.len() as u64, counted }))
+        render_again(&again.cut_short, &cut);
+        render_again(&again.beyond_reach, &beyond);
+        Some((out, HandedOver { loops_cut: cut.len() as u64, beyond_reach: beyond.len() as u64 }))
     }
 
     fn tile_bytes(&self, rows: u32) -> u64 {
@@ -604,11 +610,18 @@ fn rgb_of(words: impl Iterator<Item = u32>) -> Vec<u8> {
     out
 }
 
-/// Pixels of a tile the reference rendered for the kernel, by why ([`Handover`]), and what
-/// it counted rendering them (`-stats`).
+/// Pixels of a tile the reference rendered for the kernel, by why ([`Handover`]).
 #[derive(Clone, Copy, Debug, Default)]
 struct HandedOver {
     loops_cut: u64,
     beyond_reach: u64,
-    counted: RayStats,
+}
+
+/// The references that render handed-over pixels again, each built once per band, when
+/// its first pixel comes (with `-grid`, building one builds the grid): one for the pixels
+/// cut short, whose counts `-stats` adds, one for those beyond a texture's reach.
+#[derive(Default)]
+struct RenderAgain<'s> {
+    cut_short: std::cell::OnceCell<Reference<'s>>,
+    beyond_reach: std::cell::OnceCell<Reference<'s>>,
 }
