@@ -57,6 +57,16 @@ pub enum Footprint {
     Sphere { center: DVec3, radius: f64 },
 }
 
+impl Footprint {
+    /// The box the footprint covers.
+    pub fn bounds(&self) -> Bounds {
+        match *self {
+            Footprint::Box(b) => b,
+            Footprint::Sphere { center, radius } => Bounds::sphere(center, radius),
+        }
+    }
+}
+
 /// A uniform grid over a box, with the items of each cell.
 #[derive(Clone, Debug)]
 pub struct Grid {

@@ -185,7 +185,7 @@ impl<'a> ReferenceScene<'a> {
                 }
             }
         }
-        let bounds = footprints.iter().fold(Bounds::EMPTY, |all, f| all.union(&footprint_bounds(f)));
+        let bounds = footprints.iter().fold(Bounds::EMPTY, |all, f| all.union(&f.bounds()));
         SceneGrid { grid: Grid::new(bounds, size, &footprints), items, unbounded }
     }
 
@@ -454,14 +454,6 @@ fn intersect_mesh(mesh: &Mesh, bounds: &Bounds, ray: &Ray, want: Want, stats: &m
         }
     }
     nearest
-}
-
-/// The box a footprint covers.
-fn footprint_bounds(footprint: &Footprint) -> Bounds {
-    match *footprint {
-        Footprint::Box(b) => b,
-        Footprint::Sphere { center, radius } => Bounds::sphere(center, radius),
-    }
 }
 
 /// One world ray carried into the space of each Transform it is needed in, each at most

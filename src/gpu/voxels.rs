@@ -24,7 +24,7 @@ use std::time::Instant;
 pub fn voxel_grid(scene: &Scene, size: GridSize, camera_center: DVec3) -> GpuGrid {
     let start = Instant::now();
     let footprints = footprints(scene);
-    let bounds = footprints.iter().fold(Bounds::EMPTY, |all, f| all.union(&extent(f)));
+    let bounds = footprints.iter().fold(Bounds::EMPTY, |all, f| all.union(&f.bounds()));
     let grid = Grid::new(bounds, size, &footprints);
     let [nx, ny, nz] = grid.size();
     let mut ranges = Vec::with_capacity(grid.cell_count());
@@ -72,12 +72,4 @@ fn footprints(scene: &Scene) -> Vec<Footprint> {
         }
     });
     out
-}
-
-/// The box a footprint spans.
-fn extent(footprint: &Footprint) -> Bounds {
-    match *footprint {
-        Footprint::Box(b) => b,
-        Footprint::Sphere { center, radius } => Bounds::sphere(center, radius),
-    }
 }
