@@ -46,7 +46,11 @@ fn run() -> Result<(), Failure> {
 
 fn render(args: &RenderArgs, habits: Habits) -> Result<(), Failure> {
     let progress = habits.verbosity != Verbosity::Quiet;
-    if let Some(preview) = app::job::preview_notice(args).filter(|_| progress) {
+    let no_window = if args.gui { show_live(args, habits)? } else { Some(String::new()) };
+    let Some(no_window) = no_window else {
+        return Ok(()); // The window was shown, and closed.
+    };
+    if let Some(preview) = app::job::preview_notice(args, &no_window).filter(|_| progress) {
         say(&format!("note: {preview}"));
     }
     if !args.writes_something() {
@@ -80,6 +84,29 @@ fn render(args: &RenderArgs, habits: Habits) -> Result<(), Failure> {
         exit::print(&app::job::stats_text(args, &report.stats, seconds))?;
     }
     Ok(())
+}
+
+/// `-gui`: the render live in a window (src/app/window) until it is closed; `None` then,
+/// else why no window opened, and the line renders as without `-gui`.
+#[cfg(feature = "gui")]
+fn show_live(args: &RenderArgs, habits: Habits) -> Result<Option<String>, Failure> {
+    if args.tile.is_some() {
+        return Ok(Some("a --tile part is rendered without one".into()));
+    }
+    if let Some(why) = app::window::no_display() {
+        return Ok(Some(why));
+    }
+    let (scene, _) = app::job::load(args)?;
+    warn(&scene.warnings, habits);
+    match app::window::show(args, scene, habits.verbosity == Verbosity::Verbose)? {
+        app::window::Shown::Closed => Ok(None),
+        app::window::Shown::NoWindow(why) => Ok(Some(why)),
+    }
+}
+
+#[cfg(not(feature = "gui"))]
+fn show_live(_: &RenderArgs, _: Habits) -> Result<Option<String>, Failure> {
+    Ok(Some("built without the gui feature".into()))
 }
 
 fn compare(args: &RenderArgs, outputs: Outputs, max_diff_pixels: Option<u64>, habits: Habits) -> Result<(), Failure> {

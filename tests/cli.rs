@@ -702,10 +702,10 @@ fn flag_equals_value_and_did_you_mean() {
     }
 }
 
-/// The course's assignment 3 lines carry `-gui`, `-tessellation θ φ` and `-gouraud`, which
-/// shape its OpenGL preview, not the file: they are accepted, one notice says no window is
-/// opened, and the image is the one the line writes without them. `-gui` with no image
-/// flag renders nothing, says so and exits 0; a malformed `-tessellation` is a usage error.
+/// The course's assignment 3 lines carry `-gui`, `-tessellation θ φ` and `-gouraud`. Without
+/// a display (these tests remove it) no window opens: one notice says why, and the image is
+/// the one the line writes without them. `-gui` with no image flag then renders nothing,
+/// says so and exits 0; a malformed `-tessellation` is a usage error.
 #[test]
 fn preview_flags_are_accepted_and_change_nothing() {
     let dir = tempfile::tempdir().unwrap();
@@ -721,7 +721,13 @@ fn preview_flags_are_accepted_and_change_nothing() {
     assert!(preview.status.success(), "{}", stderr(&preview));
     assert_eq!(
         stderr(&preview),
-        "raycaster: note: -gui, -tessellation and -gouraud shape the course's OpenGL preview: no window is opened\n"
+        "raycaster: note: -gui: no window (no display: DISPLAY and WAYLAND_DISPLAY are unset); the files are \
+         written as without it\n"
+    );
+    let ignored = render(&["-tessellation", "10", "5"], "ignored.tga");
+    assert_eq!(
+        stderr(&ignored),
+        "raycaster: note: -tessellation and -gouraud shape only the course's OpenGL preview: ignored\n"
     );
     assert_eq!(
         std::fs::read(dir.path().join("preview.tga")).unwrap(),
@@ -736,7 +742,8 @@ fn preview_flags_are_accepted_and_change_nothing() {
     assert_eq!(window_only.status.code(), Some(0), "{}", stderr(&window_only));
     assert_eq!(
         stderr(&window_only),
-        "raycaster: note: -gui without -output, -normals or -depth: no window is opened, nothing rendered\n"
+        "raycaster: note: -gui: no window (no display: DISPLAY and WAYLAND_DISPLAY are unset), and no -output, \
+         -normals or -depth: nothing rendered\n"
     );
     assert_eq!(file_names(dir.path()), before);
     // Without -gui, a line that writes nothing is still an error.
@@ -853,9 +860,10 @@ fn a_batch_of_preview_lines_says_so_once() {
     assert!(result.status.success(), "{}", stderr(&result));
     assert_eq!(
         stderr(&result),
-        "raycaster: commands.txt:1: note: -gui, -tessellation and -gouraud shape the course's OpenGL preview: \
-         no window is opened\n\
-         raycaster: commands.txt:3: note: -gui without -output, -normals or -depth: no window is opened, nothing rendered\n"
+        "raycaster: commands.txt:1: note: -gui: no window (a batch opens none); the files are written as without \
+         it\n\
+         raycaster: commands.txt:3: note: -gui: no window (a batch opens none), and no -output, -normals or -depth: \
+         nothing rendered\n"
     );
 }
 

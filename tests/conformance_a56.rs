@@ -16,7 +16,6 @@ mod common;
 
 use common::{copy_course_folder, corpus, course_commands, MAX_OFF_FRACTION};
 use std::path::Path;
-use std::process::Command;
 
 /// Why the GPU kernel refuses a line, as its message says it.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -36,12 +35,7 @@ fn refusal_kind(message: &str) -> Option<Refusal> {
 /// Runs `command` in `dir` with `--backend backend`: `Ok` on success, else the stderr lines
 /// that are not the binary's notes (e.g. `-gui` opening no window).
 fn run(dir: &Path, command: &[String], backend: &str) -> Result<(), Vec<String>> {
-    let output = Command::new(env!("CARGO_BIN_EXE_raycaster"))
-        .args(command)
-        .args(["--backend", backend])
-        .current_dir(dir)
-        .output()
-        .unwrap();
+    let output = common::bin::command().args(command).args(["--backend", backend]).current_dir(dir).output().unwrap();
     let stderr = String::from_utf8_lossy(&output.stderr);
     match output.status.code() {
         Some(0) => Ok(()),

@@ -9,10 +9,10 @@ use raycaster::render::{Output, RenderOptions};
 use raycaster::sampling::{Filter, Sampler, Sampling};
 use raycaster::scene::Scene;
 use std::path::Path;
-use std::process::{Command, Output as Ran};
+use std::process::Output as Ran;
 
 fn raycaster_in(dir: &Path, args: &[&str]) -> Ran {
-    Command::new(env!("CARGO_BIN_EXE_raycaster")).args(args).current_dir(dir).output().unwrap()
+    common::bin::command().args(args).current_dir(dir).output().unwrap()
 }
 
 fn stderr(out: &Ran) -> String {

@@ -78,10 +78,11 @@ pub struct RenderArgs {
     pub files: OutputPaths,
     /// `-shade_back`, `--specular-fix`, `-shadows`, `-bounces N`, `-weight W`.
     pub shading: Shading,
-    /// `-gui` was given: with no image flag, the line renders nothing.
+    /// `-gui` was given: the render is shown live in a window (src/app/window), or where
+    /// none can open, rendered as without it and a notice says why.
     pub gui: bool,
-    /// `-gui`, `-tessellation` or `-gouraud` was given: they shape only the course's
-    /// OpenGL preview, which we do not open, and a notice says so.
+    /// `-gui`, `-tessellation` or `-gouraud` was given: the last two shape only the course's
+    /// OpenGL preview, and change nothing.
     pub preview: bool,
     pub backend: BackendChoice,
     pub triangle_test: TriangleTest,

@@ -257,11 +257,11 @@ pub static FLAGS: &[Flag] = &[
     Flag::course("weight", "W", Takes::Real { what: "a ray weight", set: |g, w| g.shading.weight = w }, RENDER_VERBS)
         .help("no secondary ray whose weight falls below W (default 0)"),
     Flag::course("gui", "", Takes::Switch(|g| g.gui = true), RENDER_VERBS)
-        .help("the course's OpenGL preview: accepted, no window is opened"),
+        .help("show the render live in a window (mouse: orbit, pan, zoom; r writes the files)"),
     Flag::course("tessellation", "THETA PHI", Takes::Steps(|g, _| g.preview = true), RENDER_VERBS)
-        .help("sphere facets of the OpenGL preview: accepted, ignored"),
+        .help("sphere facets of the course's OpenGL preview: accepted, ignored"),
     Flag::course("gouraud", "", Takes::Switch(|g| g.preview = true), RENDER_VERBS)
-        .help("smooth spheres in the OpenGL preview: accepted, ignored"),
+        .help("smooth spheres in the course's OpenGL preview: accepted, ignored"),
     Flag::course("grid", "NX NY NZ", Takes::Cells(|g, size| g.grid = Some(size)), RENDER_VERBS).help(
         "a uniform grid of NX×NY×NZ cells over the scene's bounds (planes\n\
          outside it) through which every ray finds what it hits",

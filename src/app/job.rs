@@ -47,17 +47,23 @@ pub fn options_for(args: &RenderArgs) -> RenderOptions {
     }
 }
 
-/// The notice for a command line with the course's OpenGL preview flags, which shape a
-/// window we do not open (GRAMMAR.md A3): `None` without them.
-pub fn preview_notice(args: &RenderArgs) -> Option<&'static str> {
-    match (args.preview, !args.writes_something()) {
-        (false, _) => None,
-        (true, false) => {
-            Some("-gui, -tessellation and -gouraud shape the course's OpenGL preview: no window is opened")
+/// The notice for a command line with the course's preview flags where no window opens
+/// (`no_window` says why): `-gui` renders as without it, and `-tessellation` and `-gouraud`,
+/// which shape only the course's OpenGL preview, change nothing (GRAMMAR.md A3). `None`
+/// without them.
+pub fn preview_notice(args: &RenderArgs, no_window: &str) -> Option<String> {
+    match (args.gui, args.preview, args.writes_something()) {
+        (false, false, _) => None,
+        (false, true, _) => Some("-tessellation and -gouraud shape only the course's OpenGL preview: ignored".into()),
+        (true, _, true) => Some(format!("-gui: no window ({no_window}); the files are written as without it")),
+        (true, _, false) => {
+            Some(format!("-gui: no window ({no_window}), and no -output, -normals or -depth: nothing rendered"))
         }
-        (true, true) => Some("-gui without -output, -normals or -depth: no window is opened, nothing rendered"),
     }
 }
+
+/// Why a batch's `-gui` lines open no window.
+const BATCH_OPENS_NO_WINDOW: &str = "a batch opens none";
 
 /// `-stats`: the course's `RayTracingStats::PrintStatistics` block (assignment 6, in its
 /// order and wording), for a render that took `seconds` (rendering and writing, as the
@@ -426,7 +432,7 @@ pub enum LineReport {
     /// `auto` rendered the line with the reference after the GPU refused it, and why.
     Fallback(String),
     /// Something the line asked for that is not done, as [`preview_notice`] says.
-    Notice(&'static str),
+    Notice(String),
     /// `-stats`: the block [`stats_text`] writes, for stdout.
     Stats(String),
     Failure(String),
@@ -491,13 +497,14 @@ pub fn run_batch(
         count.run += 1;
         let failure = match cli::parse_args(&words).and_then(|c| validate::check(&c).map(|()| c)) {
             Ok(Command::Render(args)) if !args.writes_something() => {
-                tell(line_number, LineReport::Notice(preview_notice(&args).expect("-gui, with nothing to write")));
+                let notice = preview_notice(&args, BATCH_OPENS_NO_WINDOW).expect("-gui, with nothing to write");
+                tell(line_number, LineReport::Notice(notice));
                 None
             }
             Ok(Command::Render(args)) => match run(&args, backend, false) {
                 Ok(done) => {
                     let ms = done.parse_ms + done.render_ms + done.write_ms;
-                    if let Some(notice) = preview_notice(&args).filter(|_| !preview_told) {
+                    if let Some(notice) = preview_notice(&args, BATCH_OPENS_NO_WINDOW).filter(|_| !preview_told) {
                         preview_told = true;
                         tell(line_number, LineReport::Notice(notice));
                     }

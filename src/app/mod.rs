@@ -2,7 +2,8 @@
 //! library's API. Modules import only from the layers below their own:
 //!
 //! 1. [`exit`]: how the command ends; [`signals`]: interrupts, ending through [`exit`];
-//! 2. [`job`]: one command line's render, `compare`'s, and batches; [`stitch`]: assembling
+//! 2. [`window`]: `-gui`'s live view, over [`job`] and [`backend`];
+//!    [`job`]: one command line's render, `compare`'s, and batches; [`stitch`]: assembling
 //!    the parts of a split render; [`bench`]: `raycaster bench`;
 //! 3. [`cli`]: parsing; [`validate`]: the checks of a parsed command line that look at the
 //!    file system; [`output_file`]: the image files asked for and the sinks they are
@@ -27,3 +28,5 @@ pub mod progress;
 pub mod signals;
 pub mod stitch;
 pub mod validate;
+#[cfg(feature = "gui")]
+pub mod window;

@@ -387,18 +387,29 @@ impl GpuRenderer {
     }
 
     async fn open(options: GpuOptions) -> Result<GpuRenderer, GpuError> {
-        let mut descriptor = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
-        if std::env::var_os("WGPU_BACKEND").is_none() {
-            descriptor.backends = wgpu::Backends::PRIMARY;
-        }
-        let instance = wgpu::Instance::new(descriptor);
-        let adapter = instance
+        let adapter = Self::instance()
             .request_adapter(&wgpu::RequestAdapterOptions {
                 power_preference: wgpu::PowerPreference::HighPerformance,
                 ..Default::default()
             })
             .await
             .map_err(|e| GpuError::NoAdapter(e.to_string()))?;
+        Self::on_adapter(&adapter, options).await
+    }
+
+    /// The wgpu instance renderers find their adapters in: the primary backends (Vulkan,
+    /// Metal, DX12), or those `WGPU_BACKEND` names.
+    pub fn instance() -> wgpu::Instance {
+        let mut descriptor = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
+        if std::env::var_os("WGPU_BACKEND").is_none() {
+            descriptor.backends = wgpu::Backends::PRIMARY;
+        }
+        wgpu::Instance::new(descriptor)
+    }
+
+    /// Opens `adapter`'s device as the kernel needs it, and a renderer on it (for a caller
+    /// that chose the adapter, such as one that presents to a window).
+    pub async fn on_adapter(adapter: &wgpu::Adapter, options: GpuOptions) -> Result<GpuRenderer, GpuError> {
         // The defaults are below what lavapipe and real GPUs offer (docs/lavapipe.md); ask for all.
         let limits = adapter.limits();
         // Kernel time from the GPU's own clock where the adapter offers it (lavapipe does).
@@ -451,6 +462,16 @@ impl GpuRenderer {
     /// no second device).
     pub fn on_same_device(&self, options: GpuOptions) -> GpuRenderer {
         Self::with_device(self.adapter_info.clone(), self.device.clone(), self.queue.clone(), options)
+    }
+
+    /// The device and queue, for a caller that shows what it renders (the live view of
+    /// `-gui`, which presents on the same device).
+    pub fn device(&self) -> &wgpu::Device {
+        &self.device
+    }
+
+    pub fn queue(&self) -> &wgpu::Queue {
+        &self.queue
     }
 
     /// Which adapter this renderer runs on (name, backend, device type).

@@ -117,12 +117,7 @@ pub const MAX_OFF_FRACTION: f64 = 0.001;
 /// Runs one of the course's command lines in `dir` with `--backend backend`, failing the
 /// test with the command's stderr when it fails.
 pub fn run_course_line(dir: &std::path::Path, command: &[String], backend: &str) {
-    let output = std::process::Command::new(env!("CARGO_BIN_EXE_raycaster"))
-        .args(command)
-        .args(["--backend", backend])
-        .current_dir(dir)
-        .output()
-        .unwrap();
+    let output = bin::command().args(command).args(["--backend", backend]).current_dir(dir).output().unwrap();
     assert!(output.status.success(), "{}: {}", command.join(" "), String::from_utf8_lossy(&output.stderr));
 }
 

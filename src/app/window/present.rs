@@ -1,0 +1,110 @@
+//! The window's surface: a device that can present to it, and an 8-bit image copied onto it
+//! byte for byte (no shader, no filtering: the window shows exactly the bytes a file would
+//! hold).
+
+use raycaster::gpu::{GpuOptions, GpuRenderer};
+use std::sync::Arc;
+use winit::window::Window;
+
+/// A surface configured for copies, and a renderer on a device that presents to it.
+pub struct Screen {
+    surface: wgpu::Surface<'static>,
+    gpu: GpuRenderer,
+    config: wgpu::SurfaceConfiguration,
+    /// Where a pixel's red, green and blue bytes go among its four.
+    order: [usize; 3],
+}
+
+impl Screen {
+    /// Opens an adapter that can present to `window` (the first wgpu offers, as
+    /// [`GpuRenderer::new`] does), its device, and a renderer on it.
+    pub fn open(window: Arc<Window>) -> Result<Screen, String> {
+        let instance = GpuRenderer::instance();
+        let size = window.inner_size();
+        let surface = instance.create_surface(window).map_err(|e| format!("no surface for the window: {e}"))?;
+        let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+            power_preference: wgpu::PowerPreference::HighPerformance,
+            compatible_surface: Some(&surface),
+            ..Default::default()
+        }))
+        .map_err(|e| format!("no GPU presents to this display: {e}"))?;
+        let caps = surface.get_capabilities(&adapter);
+        if !caps.usages.contains(wgpu::TextureUsages::COPY_DST) {
+            return Err(format!("{}'s surfaces take no copies", adapter.get_info().name));
+        }
+        // 8-bit formats that store the bytes as given (sRGB formats would re-encode them).
+        let (format, order) = caps
+            .formats
+            .iter()
+            .find_map(|&f| match f {
+                wgpu::TextureFormat::Bgra8Unorm => Some((f, [2, 1, 0])),
+                wgpu::TextureFormat::Rgba8Unorm => Some((f, [0, 1, 2])),
+                _ => None,
+            })
+            .ok_or_else(|| format!("no 8-bit linear surface format among {:?}", caps.formats))?;
+        let gpu =
+            pollster::block_on(GpuRenderer::on_adapter(&adapter, GpuOptions::default())).map_err(|e| e.to_string())?;
+        let config = wgpu::SurfaceConfiguration {
+            usage: wgpu::TextureUsages::COPY_DST,
+            format,
+            width: size.width.max(1),
+            height: size.height.max(1),
+            present_mode: wgpu::PresentMode::Fifo,
+            desired_maximum_frame_latency: 2,
+            alpha_mode: caps.alpha_modes[0],
+            view_formats: vec![],
+            color_space: wgpu::SurfaceColorSpace::Auto,
+        };
+        surface.configure(gpu.device(), &config);
+        Ok(Screen { surface, gpu, config, order })
+    }
+
+    /// The renderer on the presenting device.
+    pub fn gpu(&self) -> &GpuRenderer {
+        &self.gpu
+    }
+
+    /// The surface's size in pixels.
+    pub fn size(&self) -> (u32, u32) {
+        (self.config.width, self.config.height)
+    }
+
+    /// Follows the window to its new size.
+    pub fn resize(&mut self, width: u32, height: u32) {
+        self.config.width = width.max(1);
+        self.config.height = height.max(1);
+        self.surface.configure(self.gpu.device(), &self.config);
+    }
+
+    /// Shows `rgb`, an image of the surface's size, row by row from the top. Returns
+    /// whether it was shown (a window being resized or hidden skips a frame).
+    pub fn show(&mut self, rgb: &[u8]) -> bool {
+        let gpu = &self.gpu;
+        let (width, height) = self.size();
+        assert_eq!(rgb.len(), 3 * width as usize * height as usize, "an image of the surface's size");
+        let frame = match self.surface.get_current_texture() {
+            wgpu::CurrentSurfaceTexture::Success(frame) | wgpu::CurrentSurfaceTexture::Suboptimal(frame) => frame,
+            wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
+                self.surface.configure(gpu.device(), &self.config);
+                return false;
+            }
+            _ => return false,
+        };
+        let mut texels = vec![255u8; 4 * width as usize * height as usize];
+        for (texel, pixel) in texels.chunks_exact_mut(4).zip(rgb.chunks_exact(3)) {
+            for (channel, &at) in self.order.iter().enumerate() {
+                texel[at] = pixel[channel];
+            }
+        }
+        gpu.queue().write_texture(
+            frame.texture.as_image_copy(),
+            &texels,
+            wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(4 * width), rows_per_image: Some(height) },
+            wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
+        );
+        // The copy is queued: submit it, or the frame is presented cleared.
+        gpu.queue().submit([]);
+        gpu.queue().present(frame);
+        true
+    }
+}
