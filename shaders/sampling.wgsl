@@ -1,7 +1,7 @@
 // Supersampling (docs/SPEC.md §8): where a pixel's samples lie, the same positions as
 // raycaster::sampling on the host, and the entry point that traces one sample per
-// invocation. Reached only from `main_samples` and `main_filter`: a render without
-// sampling compiles none of it.
+// invocation (or a packet of them, with bins). Reached only from `main_samples`,
+// `main_samples_bins` and `main_filter`: a render without sampling compiles none of it.
 
 // gpu::layout::GpuSampling: the sampler, the filter and the rows of samples a tile holds.
 struct Sampling {
@@ -85,6 +85,50 @@ fn main_samples(@builtin(global_invocation_id) id: vec3<u32>) {
     let ray = primary_ray_at(i, j, sample_position(i, j, k));
     let shaded = shade_pixel(ray, closest_hit(ray, t_min()));
     let cut = LOOP_CANARY && loops_were_cut();
+    write_sample(i, r, k, shaded, cut);
+    flush_sample_counts(id, r, cut);
+}
+
+// With bins: PACKET samples of one pixel per invocation (z: samples PACKET·z …), which walk
+// the pixel's bin together. A bin lists what any ray through its pixels can meet, anywhere
+// in them (gpu::binning::PAD_PIXELS). A packet past the last sample repeats it, traced but
+// not written.
+@compute @workgroup_size(WORKGROUP, WORKGROUP)
+fn main_samples_bins(@builtin(global_invocation_id) id: vec3<u32>) {
+    P = params;
+    let i = id.x;
+    let r = id.y;
+    let first = id.z * PACKET;
+    if (i >= P.width || r >= sampling.rows || first >= sampling.count) {
+        return;
+    }
+    let image_row = sampling.first_row + r;
+    let j = P.height - 1u - image_row;
+    let tmin = t_min();
+    for (var q = 0u; q < PACKET; q++) {
+        let k = min(first + q, sampling.count - 1u);
+        packet_rays[q] = primary_ray_at(i, j, sample_position(i, j, k));
+        if (first + q < sampling.count) {
+            count(COUNT_RAYS);
+        }
+        packet_hits[q] = closest_plane(packet_rays[q], tmin);
+    }
+    walk_bin_packet((image_row / BIN_SIDE) * P.bin_columns + i / BIN_SIDE, tmin);
+    var shaded: array<Shaded, PACKET>;
+    for (var q = 0u; q < PACKET; q++) {
+        shaded[q] = shade_pixel(packet_rays[q], packet_hits[q]);
+    }
+    // One canary after all of the invocation's loops, as in main_bins.
+    let cut = LOOP_CANARY && loops_were_cut();
+    for (var q = 0u; q < PACKET; q++) {
+        if (first + q < sampling.count) {
+            write_sample(i, r, first + q, shaded[q], cut);
+        }
+    }
+    flush_sample_counts(id, r, cut);
+}
+
+fn write_sample(i: u32, r: u32, k: u32, shaded: Shaded, cut: bool) {
     let w = ((r * P.width + i) * sampling.count + k) * SAMPLE_WORDS;
     samples[w] = select(0u, 1u, shaded.hit) | select(0u, 2u, cut) | select(0u, 4u, shaded.beyond_reach);
     samples[w + 1u] = bitcast<u32>(shaded.color.x);
@@ -94,8 +138,11 @@ fn main_samples(@builtin(global_invocation_id) id: vec3<u32>) {
     samples[w + 5u] = bitcast<u32>(shaded.normal.y);
     samples[w + 6u] = bitcast<u32>(shaded.normal.z);
     samples[w + 7u] = bitcast<u32>(shaded.t);
-    // -stats: a row of the filter's overlap is traced again as a row of its own tile, and
-    // counted there; a sample cut short, by the reference that renders its pixels again.
+}
+
+// -stats: a row of the filter's overlap is traced again as a row of its own tile, and
+// counted there; a sample cut short, by the reference that renders its pixels again.
+fn flush_sample_counts(id: vec3<u32>, r: u32, cut: bool) {
     let image_row = sampling.first_row + r;
     if (!cut && image_row >= P.first_row && image_row < P.first_row + P.tile_rows) {
         flush_counts(stats_slot(id));

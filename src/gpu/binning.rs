@@ -22,7 +22,10 @@ use glam::{DVec3, Vec3};
 pub const BIN_SIDE: u32 = super::WORKGROUP;
 
 /// Pixels of padding around each primitive's projected bounds: the f32 rays of the kernel
-/// deviate from the exact ones by far less than a pixel.
+/// deviate from the exact ones by far less than a pixel. (Samples anywhere in a pixel,
+/// docs/SPEC.md §8, need none: pixel i's lie within ½ of its centre, so only pixels
+/// i > x₀ − ½ can meet bounds starting at x₀, and rounding the rectangle out to whole
+/// pixels, ⌊x₀ − pad⌋, already takes in every one of them.)
 const PAD_PIXELS: f64 = 1.0;
 
 /// The bins of one frame.

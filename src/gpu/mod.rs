@@ -166,7 +166,8 @@ pub enum Stage {
     /// `main` or `main_bins`: one sample per pixel, at its centre.
     #[default]
     Pixels,
-    /// `main_samples`: one invocation per sample.
+    /// `main_samples`: one invocation per sample; `main_samples_bins`, with bins: a packet of
+    /// a pixel's samples per invocation, walking its bin.
     Samples,
     /// `main_filter`: one invocation per output pixel, reading the samples.
     Filter,
@@ -228,6 +229,7 @@ impl KernelConfig {
     /// The kernel's entry point: `main_bins` renders packets from bins, `main` one pixel.
     pub fn entry_point(&self) -> &'static str {
         match self.stage {
+            Stage::Samples if self.use_bins => return "main_samples_bins",
             Stage::Samples => return "main_samples",
             Stage::Filter => return "main_filter",
             Stage::Pixels => {}

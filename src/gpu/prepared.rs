@@ -97,10 +97,7 @@ impl<'a> PreparedScene<'a> {
             true => GridChoice::Given(super::voxels::voxel_grid(scene, size, rays.center)),
             false => GridChoice::Walk(size),
         });
-        // Screen-space bins list what the rays through the pixels' centres can meet: samples
-        // elsewhere in the pixel walk the hierarchy, as secondary rays do.
-        let off_centre = secondary_rays || options.sampling.is_some();
-        let mut buffers = SceneBuffers::new(scene, &rays, &gpu.options, off_centre, grid);
+        let mut buffers = SceneBuffers::new(scene, &rays, &gpu.options, secondary_rays, grid);
         if let Some(sampling) = options.sampling {
             let samples = super::texture_range::checker_samples_per_pixel(&sampling) as f32;
             for texture in buffers.textures.iter_mut().filter(|t| t.kind == GpuTexture::CHECKERBOARD) {
@@ -372,7 +369,9 @@ impl<'a> PreparedScene<'a> {
                     };
                     gpu.queue.write_buffer(&s.sampling, 0, bytemuck::bytes_of(&header));
                     pass.set_pipeline(&sampled.samples);
-                    pass.dispatch_workgroups(columns, sample_rows.div_ceil(WORKGROUP), sampling.count());
+                    // With bins, an invocation traces a packet of a pixel's samples.
+                    let packets = sampling.count().div_ceil(self.packet);
+                    pass.dispatch_workgroups(columns, sample_rows.div_ceil(WORKGROUP), packets);
                     pass.set_pipeline(&sampled.filter);
                     pass.dispatch_workgroups(columns, rows.div_ceil(WORKGROUP), 1);
                 }

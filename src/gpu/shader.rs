@@ -28,7 +28,7 @@ use std::sync::OnceLock;
 ///   output;
 /// - `entry.wgsl`: `main` and `main_bins`;
 /// - `sampling.wgsl`, `filter.wgsl`: with sampling (docs/SPEC.md §8), the samples' positions
-///   and `main_samples`, then the filters and `main_filter`.
+///   and `main_samples` (`main_samples_bins` with bins), then the filters and `main_filter`.
 ///
 /// Plain concatenation, not a composer such as naga_oil: nothing is resolved at run time,
 /// no dependency is added, and naga sees one module as it did when the kernel was one file
