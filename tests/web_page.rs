@@ -10,7 +10,7 @@
 
 mod common;
 
-use raycaster::image_io::{color_image, normals_image, read_image};
+use raycaster::image_io::{color_image, depth_image, normals_image, read_image};
 use raycaster::metrics::image_diff;
 use raycaster::render::RenderOptions;
 use std::io::Write as _;
@@ -177,18 +177,20 @@ fn page_renders_like_the_reference_and_fails_like_the_command_line() {
         std::fs::write(extra.path().join(name), text).unwrap();
     }
 
-    // Sphere and box under four lights; meshes from an OBJ file; not square either way.
+    // Sphere and box under four lights; meshes from an OBJ file; not square either way. The
+    // depth image of `-depth 6 10` (the octahedra lie 7 to 9 from the camera).
     let renders = [
         ("three_lights.txt", (160, 120), "color"),
         ("mesh_octahedron.txt", (120, 160), "color"),
         ("mesh_octahedron.txt", (120, 160), "normals"),
+        ("mesh_octahedron.txt", (120, 160), "depth"),
     ];
     let mut jobs: Vec<(String, Option<PathBuf>)> = renders
         .iter()
         .enumerate()
         .map(|(k, (scene, (w, h), output))| {
             let png = extra.path().join(format!("page_{k}.png"));
-            (format!("scene=extra/{scene}&size={w},{h}&output={output}"), Some(png))
+            (format!("scene=extra/{scene}&size={w},{h}&output={output}&depth=6,10"), Some(png))
         })
         .collect();
     jobs.extend(bad_scenes.iter().map(|(name, _, _)| (format!("scene=extra/{name}&size=8,8"), None)));
@@ -201,7 +203,11 @@ fn page_renders_like_the_reference_and_fails_like_the_command_line() {
         let page = read_image(&extra.path().join(format!("page_{k}.png"))).unwrap();
         let loaded = raycaster::scene::load_scene(&extra.path().join(scene)).unwrap();
         let frame = raycaster::cpu::render(&loaded, &RenderOptions::all(*w, *h));
-        let reference = if *output == "color" { color_image(&frame) } else { normals_image(&frame) };
+        let reference = match *output {
+            "color" => color_image(&frame),
+            "normals" => normals_image(&frame),
+            _ => depth_image(&frame, 6.0, 10.0),
+        };
         assert_eq!(page.dimensions(), reference.dimensions(), "{scene} {output}");
         let diff = image_diff(&page, &reference);
         println!(

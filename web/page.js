@@ -42,6 +42,10 @@ function flags() {
   f.shade_back = $("shade_back").checked;
   f.shadows = $("shadows").checked;
   f.bounces = Number($("bounces").value) || 0;
+  if ($("depth_min").value !== "" && $("depth_max").value !== "") {
+    f.depth_min = Number($("depth_min").value);
+    f.depth_max = Number($("depth_max").value);
+  }
   return f;
 }
 
@@ -133,7 +137,7 @@ function wire() {
 }
 
 // The test hook: ?scene=URL&size=W,H[&output=color|normals|depth][&shade_back=1][&shadows=1]
-// [&bounces=N] renders that scene into the canvas and sets the title to `done`, or to the
+// [&bounces=N][&depth=MIN,MAX] renders that scene into the canvas and sets the title to `done`, or to the
 // error text.
 async function hook(params) {
   const size = (params.get("size") ?? "256,256").split(",");
@@ -146,6 +150,7 @@ async function hook(params) {
   $("shade_back").checked = params.get("shade_back") === "1";
   $("shadows").checked = params.get("shadows") === "1";
   $("bounces").value = params.get("bounces") ?? "0";
+  [$("depth_min").value, $("depth_max").value] = (params.get("depth") ?? ",").split(",");
   scene = await fetchScene(params.get("scene"));
   await renderScene();
 }
