@@ -84,9 +84,11 @@ fn build_page() -> PathBuf {
 }
 
 /// What the page did for one hook URL.
+#[derive(Default)]
 struct Visit {
     title: String,
     times: String,
+    notes: Vec<String>,
 }
 
 /// Opens `index.html?QUERY` for each `(query, png)` in one browser, the test's scenes in
@@ -110,25 +112,31 @@ fn visit(chromium: &Path, dist: &Path, extra: &Path, jobs: &[(String, Option<Pat
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert!(output.status.success(), "drive_page.py failed:\n{stderr}");
     let stdout = String::from_utf8_lossy(&output.stdout);
-    let field = |prefix: &str| -> Vec<String> {
-        stdout.lines().filter_map(|l| l.strip_prefix(prefix)).map(str::to_string).collect()
-    };
-    let visits: Vec<Visit> =
-        field("title: ").into_iter().zip(field("times: ")).map(|(title, times)| Visit { title, times }).collect();
+    let mut visits: Vec<Visit> = Vec::new();
+    for line in stdout.lines() {
+        match (line.split_once(": "), visits.last_mut()) {
+            (Some(("title", title)), _) => visits.push(Visit { title: title.to_string(), ..Visit::default() }),
+            (Some(("times", times)), Some(visit)) => visit.times = times.to_string(),
+            (Some(("note", note)), Some(visit)) => visit.notes.push(note.to_string()),
+            _ => panic!("drive_page.py printed `{line}`"),
+        }
+    }
     assert_eq!(visits.len(), jobs.len(), "one result per page:\n{stdout}\n{stderr}");
     visits
 }
 
-/// The first line the command line prints on stderr for `scene` in `dir` (its exit
-/// status must be 1: a scene error).
-fn cli_error(dir: &Path, scene: &str) -> String {
+/// The lines the command line prints on stderr rendering `scene` in `dir` at `w × h` on
+/// the GPU (as the page does; `auto` would give small images to the reference at once),
+/// which must exit with `status`.
+fn cli_stderr(dir: &Path, scene: &str, (w, h): (u32, u32), status: i32) -> Vec<String> {
     let output = Command::new(env!("CARGO_BIN_EXE_raycaster"))
-        .args(["-input", scene, "-size", "8", "8", "-output", "cli.tga", "--backend", "cpu"])
+        .args(["-input", scene, "-size", &w.to_string(), &h.to_string(), "-output", "cli.tga", "--backend", "gpu"])
         .current_dir(dir)
         .output()
         .unwrap();
-    assert_eq!(output.status.code(), Some(1), "{scene}: {}", String::from_utf8_lossy(&output.stderr));
-    String::from_utf8_lossy(&output.stderr).lines().next().unwrap_or_default().to_string()
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(status), "{scene}: {stderr}");
+    stderr.lines().map(str::to_string).collect()
 }
 
 /// `line:col` of the first `needle` in `text`, counted by hand (1-based, characters).
@@ -171,6 +179,12 @@ fn page_renders_like_the_reference_and_fails_like_the_command_line() {
             "none.obj",
         ),
     ];
+    // A sphere far below the kernel's f32 range beside one it renders: the page, as `auto`
+    // does, renders the scene with the reference and says why.
+    let refused = format!(
+        "{HEADER}Group {{ numObjects 2 MaterialIndex 0\n  Sphere {{ center 0 0 0 radius 1 }}\n  Sphere {{ center 2 0 0 radius 1e-30 }}\n}}\n"
+    );
+    std::fs::write(extra.path().join("refused.txt"), &refused).unwrap();
     let bad_obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2 7\n";
     std::fs::write(extra.path().join("bad.obj"), bad_obj).unwrap();
     for (name, text, _) in &bad_scenes {
@@ -184,6 +198,7 @@ fn page_renders_like_the_reference_and_fails_like_the_command_line() {
         ("mesh_octahedron.txt", (120, 160), "color"),
         ("mesh_octahedron.txt", (120, 160), "normals"),
         ("mesh_octahedron.txt", (120, 160), "depth"),
+        ("refused.txt", (64, 48), "color"),
     ];
     let mut jobs: Vec<(String, Option<PathBuf>)> = renders
         .iter()
@@ -200,6 +215,9 @@ fn page_renders_like_the_reference_and_fails_like_the_command_line() {
     for (k, (scene, (w, h), output)) in renders.iter().enumerate() {
         let visit = &visits[k];
         assert_eq!(visit.title, "done", "{scene} {output}");
+        if *scene != "refused.txt" {
+            assert_eq!(visit.notes, cli_stderr(extra.path(), scene, (*w, *h), 0), "{scene}: the command line's notes");
+        }
         let page = read_image(&extra.path().join(format!("page_{k}.png"))).unwrap();
         let loaded = raycaster::scene::load_scene(&extra.path().join(scene)).unwrap();
         let frame = raycaster::cpu::render(&loaded, &RenderOptions::all(*w, *h));
@@ -219,6 +237,13 @@ fn page_renders_like_the_reference_and_fails_like_the_command_line() {
         }
     }
     assert!(failures.is_empty(), "{failures:?}");
+    // `auto`'s notice: the GPU's refusal, `raycaster: FILE:LINE:COL: WHY; render it with
+    // --backend cpu`, as a warning that the reference renders it instead.
+    let refusal = cli_stderr(extra.path(), "refused.txt", (64, 48), 1).concat();
+    let why = refusal.strip_prefix("raycaster: ").and_then(|r| r.strip_suffix("; render it with --backend cpu"));
+    let notice = format!("raycaster: warning: {}; rendering with the f64 CPU reference instead", why.unwrap());
+    assert!(notice.contains(&format!("refused.txt:{}: ", place_of(&refused, "radius 1e-30"))), "{notice}");
+    assert_eq!(visits[renders.len() - 1].notes, [notice]);
 
     let bad_places = [
         format!("bad_number.txt:{}", place_of(&bad_scenes[0].1, bad_scenes[0].2)),
@@ -228,6 +253,6 @@ fn page_renders_like_the_reference_and_fails_like_the_command_line() {
     for (k, ((name, _, _), place)) in bad_scenes.iter().zip(&bad_places).enumerate() {
         let title = &visits[renders.len() + k].title;
         assert!(title.starts_with(&format!("raycaster: {place}: ")), "{name}: {title}");
-        assert_eq!(title, &cli_error(extra.path(), name), "{name}");
+        assert_eq!(title, &cli_stderr(extra.path(), name, (8, 8), 1).concat(), "{name}: the command line's line");
     }
 }

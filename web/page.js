@@ -53,7 +53,8 @@ function selectedOutput() {
   return document.querySelector("input[name=output]:checked").value;
 }
 
-// Renders the current scene; times are kept on window.raycasterTimes for automation.
+// Renders the current scene; its times and notes are kept on window.raycasterTimes and
+// window.raycasterNotes for automation.
 async function renderScene() {
   const [width, height] = [Number($("width").value), Number($("height").value)];
   $("status").textContent = `rendering ${scene.path} at ${width} × ${height} …`;
@@ -71,6 +72,7 @@ async function renderScene() {
   $("download").disabled = false;
   window.raycasterTimes = { wallMs, parseMs: rendered.parseMs, renderMs: rendered.renderMs,
     kernelMs: rendered.kernelMs ?? null, backend: rendered.backend };
+  window.raycasterNotes = rendered.notes;
 }
 
 function show() {

@@ -460,6 +460,12 @@ impl GpuRenderer {
         &self.adapter_info
     }
 
+    /// The device this renderer renders on (to catch its errors in error scopes, as a
+    /// browser must: there they are not raised where they happen).
+    pub fn device(&self) -> &wgpu::Device {
+        &self.device
+    }
+
     /// How this renderer renders.
     pub fn options(&self) -> &GpuOptions {
         &self.options

@@ -7,8 +7,9 @@ Serves DIST at / and EXTRA at /extra/ on 127.0.0.1, then for each job of JOBS_JS
 of {"query": "scene=extra/x.txt&size=W,H...", "png": PATH or null}) opens
 index.html?QUERY, waits until the page's title is no longer `loading` (the hook sets
 `done` or the error text) and, when the render is done and "png" is given, writes the
-canvas there as a PNG. Prints two lines per job, `title: TITLE` and `times: JSON` (the
-page's render times), and the page's console messages on stderr.
+canvas there as a PNG. Prints per job `title: TITLE`, `times: JSON` (the page's render
+times) and a line `note: NOTE` for each of the render's notes (the command line's warnings
+and notices), and the page's console messages on stderr.
 
 The system's Chromium is driven through Playwright's executable path (no browser of
 Playwright's own is downloaded), with WebGPU enabled and its network chatter off.
@@ -73,7 +74,8 @@ def run_job(page, base, job):
     if title == "done" and job.get("png"):
         url = page.eval_on_selector("#image", "canvas => canvas.toDataURL('image/png')")
         Path(job["png"]).write_bytes(base64.b64decode(url.split(",", 1)[1]))
-    return {"title": title, "times": page.evaluate("window.raycasterTimes ?? null")}
+    return {"title": title, "times": page.evaluate("window.raycasterTimes ?? null"),
+            "notes": page.evaluate("window.raycasterNotes ?? []")}
 
 
 def main():
@@ -96,6 +98,8 @@ def main():
     for result in results:
         print("title: " + result["title"].replace("\n", "\\n"))
         print("times: " + json.dumps(result["times"]))
+        for note in result["notes"]:
+            print("note: " + note.replace("\n", "\\n"))
 
 
 if __name__ == "__main__":

@@ -175,7 +175,7 @@ async fn render_scene(
     };
     let gpu = gpu().await?;
     let start = Instant::now();
-    let (frame, kernel_ns, backend) = match render_gpu(&gpu, &scene, &options).await {
+    let (frame, kernel_ns, backend) = match render_gpu(&gpu, &scene, &options).await? {
         Ok((frame, kernel_ns)) => (frame, kernel_ns, adapter_name(gpu.adapter_info())),
         // As the command line's `--backend auto`: what the kernel refuses, the reference renders.
         Err(e) if e.reference_renders_it() => {
@@ -239,8 +239,28 @@ async fn gpu() -> Result<Rc<GpuRenderer>, String> {
     Ok(gpu)
 }
 
-/// The kernel's float frame (tiles awaited one by one) and its time, where measured.
+/// The kernel's float frame (tiles awaited one by one) and its time, where measured. A
+/// browser reports a device error (an invalid pipeline, memory exhausted) to its console,
+/// not to the call that caused it, and the render would go on into a wrong image: error
+/// scopes catch them, and the render fails with the first (the outer `Err`).
 async fn render_gpu(
+    gpu: &GpuRenderer,
+    scene: &Scene,
+    options: &RenderOptions,
+) -> Result<Result<(Frame, Option<u64>), GpuError>, String> {
+    let invalid = gpu.device().push_error_scope(wgpu::ErrorFilter::Validation);
+    let memory = gpu.device().push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+    let internal = gpu.device().push_error_scope(wgpu::ErrorFilter::Internal);
+    let rendered = render_tiles(gpu, scene, options).await;
+    // Popped in the reverse order of pushing, each awaited: all of them, whatever the render did.
+    let errors = [internal.pop().await, memory.pop().await, invalid.pop().await];
+    match errors.into_iter().flatten().next() {
+        Some(error) => Err(format!("the browser's WebGPU failed the render: {error}")),
+        None => Ok(rendered),
+    }
+}
+
+async fn render_tiles(
     gpu: &GpuRenderer,
     scene: &Scene,
     options: &RenderOptions,
