@@ -59,9 +59,19 @@ async function renderScene() {
   const [width, height] = [Number($("width").value), Number($("height").value)];
   $("status").textContent = `rendering ${scene.path} at ${width} × ${height} …`;
   $("messages").textContent = "";
+  $("download").disabled = true;
   const started = performance.now();
-  rendered = await render(scene.path, scene.text, [...scene.files.keys()], [...scene.files.values()],
-    width, height, flags());
+  const asked = flags();
+  // The module's objects live in its memory until freed (a frame of floats: 32 bytes a pixel).
+  const previous = rendered;
+  rendered = null;
+  previous?.free();
+  try {
+    rendered = await render(scene.path, scene.text, [...scene.files.keys()], [...scene.files.values()],
+      width, height, asked);
+  } finally {
+    asked.free();
+  }
   const wallMs = performance.now() - started;
   show();
   const kernel = rendered.kernelMs === undefined ? "" : `, kernel ${rendered.kernelMs.toFixed(1)} ms`;
