@@ -26,6 +26,7 @@
 
 pub mod bvh;
 pub mod camera;
+pub mod clock;
 pub mod cpu;
 pub mod gpu;
 pub mod grid;

@@ -4,8 +4,8 @@
 use glam::{DMat4, DVec3};
 use proptest::prelude::*;
 use raycaster::scene::{
-    load_obj, load_scene, parse_obj, parse_scene, Light, Location, Material, Object, PointLight, Projection, Scene,
-    SceneError, Shape, MAX_NESTING,
+    load_obj, load_scene, obj_file_names, parse_obj, parse_scene, parse_scene_with, Light, Location, Material,
+    ObjFiles, Object, PointLight, Projection, Scene, SceneError, Shape, MAX_NESTING,
 };
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -884,6 +884,37 @@ fn obj_file_errors() {
     assert_eq!(error.location, Some(Location { line: 6, col: 8 }));
     assert!(error.message.starts_with("vertex index 7 out of range: the file has 3 vertices"), "{error}");
     assert!(error.message.contains("scene.txt:5:27"), "{error}");
+}
+
+/// Meshes held in memory (a browser's files, docs/SPEC.md §10) resolve and fail as on disk:
+/// the same scene, and the same located errors, for a mesh present, absent and malformed.
+#[test]
+fn obj_files_in_memory_parse_as_on_disk() {
+    let mesh = |path: &str| {
+        with_header(&["Group { numObjects 1 MaterialIndex 0", &format!("  TriangleMesh {{ obj_file {path} }}"), "}"])
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let good = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+    let bad = "v 0 0 0\nv 1 0 0\nv 0 1 0\n\nf 1 2 3\nf 1 2  7\n";
+    let mut files = std::collections::HashMap::new();
+    std::fs::create_dir(dir.path().join("meshes")).unwrap();
+    for (name, text) in [("meshes/good.obj", good), ("meshes/bad.obj", bad)] {
+        std::fs::write(dir.path().join(name), text).unwrap();
+        files.insert(dir.path().join(name), text.to_string());
+    }
+    let scene_path = dir.path().join("scene.txt");
+    for name in ["meshes/good.obj", "meshes/bad.obj", "meshes/none.obj"] {
+        let text = mesh(name);
+        std::fs::write(&scene_path, &text).unwrap();
+        let in_memory = parse_scene_with(&text, &scene_path, ObjFiles::Memory(&files));
+        match (in_memory, load_scene(&scene_path)) {
+            (Ok(memory), Ok(disk)) => assert_eq!(format!("{memory:?}"), format!("{disk:?}"), "{name}"),
+            (Err(memory), Err(disk)) => assert_eq!(memory.to_string(), disk.to_string(), "{name}"),
+            (memory, disk) => panic!("{name}: in memory {memory:?}, on disk {disk:?}"),
+        }
+    }
+    assert_eq!(obj_file_names(&mesh("meshes/good.obj")), ["meshes/good.obj"]);
+    assert_eq!(obj_file_names("# obj_file a.obj\nobj_file b.obj obj_file"), ["b.obj"]);
 }
 
 #[test]

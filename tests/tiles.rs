@@ -35,6 +35,27 @@ fn gpu_tiles_equal_one_pass() {
     assert_eq!(small.render(&scene(), &options).unwrap(), whole);
 }
 
+/// The awaited path a browser takes (one tile after another, each map awaited) gives the
+/// same floats as the threaded one, here driven by pollster, with tiles of 3 rows.
+#[test]
+fn awaited_tiles_equal_threaded_ones() {
+    if common::gpu().is_none() {
+        return;
+    }
+    let options = RenderOptions::all(37, 23);
+    let small =
+        common::gpu().unwrap().on_same_device(GpuOptions { max_tile_bytes: 37 * 3 * 32, ..GpuOptions::default() });
+    let prepared = small.prepare(&scene(), &options, false).unwrap();
+    let mut frame = raycaster::render::Frame::new(&options);
+    let stats = pollster::block_on(prepared.render_async(|tile| {
+        frame.paste(tile.first_row, &tile.to_frame());
+        Ok::<(), raycaster::gpu::GpuError>(())
+    }))
+    .unwrap();
+    assert_eq!(stats.tiles, 8);
+    assert_eq!(frame, small.render(&scene(), &options).unwrap());
+}
+
 /// The CPU reference by row ranges equals the whole frame.
 #[test]
 fn cpu_rows_equal_one_pass() {

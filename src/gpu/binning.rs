@@ -59,7 +59,7 @@ impl Bins {
         candidates: &[Candidate],
         worth_it: impl FnOnce(&ListLengths) -> bool,
     ) -> Option<Bins> {
-        let start = std::time::Instant::now();
+        let start = crate::clock::Instant::now();
         let projector = Projector::new(rays);
         let columns = rays.width.div_ceil(BIN_SIDE);
         let bin_rows = rays.height.div_ceil(BIN_SIDE);

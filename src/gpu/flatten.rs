@@ -11,10 +11,10 @@ use super::layout::*;
 use super::{Acceleration, GpuOptions};
 use crate::bvh::{Aabb, Bvh, BvhNode};
 use crate::camera::PrimaryRays;
+use crate::clock::Instant;
 use crate::grid::{Footprint, Grid, GridSize};
 use crate::scene::{ellipsoid_extent, for_each_leaf, Bounds, Object, Scene, Shape};
 use glam::{DMat3, DMat4, DVec3, Vec3};
-use std::time::Instant;
 
 /// Everything the kernel reads, ready to upload.
 #[derive(Clone, Debug, Default)]

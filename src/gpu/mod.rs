@@ -8,8 +8,10 @@
 //! (so memory is bounded by the tile, not the frame), reading tile k back while the device
 //! renders tile k + 1.
 
+mod bindings;
 pub mod binning;
 pub mod flatten;
+mod handoff;
 pub mod layout;
 pub mod precision;
 mod precision_error;
@@ -21,7 +23,9 @@ pub mod texture_range;
 pub mod tree;
 pub mod voxels;
 
-use crate::render::{Frame, Output, RenderOptions, SphereTest, TriangleTest};
+#[cfg(not(target_arch = "wasm32"))]
+use crate::render::Frame;
+use crate::render::{Output, RenderOptions, SphereTest, TriangleTest};
 use crate::scene::Scene;
 use flatten::SceneBuffers;
 use layout::PixelLayout;
@@ -340,9 +344,12 @@ pub struct GpuRenderer {
     queue: wgpu::Queue,
     adapter_info: wgpu::AdapterInfo,
     limits: wgpu::Limits,
-    bind_group_layout: wgpu::BindGroupLayout,
-    pipeline_layout: wgpu::PipelineLayout,
-    pipelines: Mutex<HashMap<KernelConfig, wgpu::ComputePipeline>>,
+    /// Every binding: the layout of every kernel on an adapter that offers them all. `None`
+    /// on one that offers fewer storage buffers per shader stage than the kernel declares,
+    /// which would refuse it: there each scene binds only those its kernels use
+    /// ([`bindings`]).
+    all_bindings: Option<bindings::BindingSet>,
+    pipelines: Mutex<HashMap<(KernelConfig, u32), wgpu::ComputePipeline>>,
     options: GpuOptions,
     timestamps: bool,
 }
@@ -379,16 +386,20 @@ pub struct RenderStats {
 impl GpuRenderer {
     /// Opens the first adapter wgpu offers (real GPUs come before CPU ones such as lavapipe;
     /// `WGPU_BACKEND` and the other wgpu environment variables are honoured).
+    #[cfg(not(target_arch = "wasm32"))]
     pub fn new() -> Result<GpuRenderer, GpuError> {
         Self::with_options(GpuOptions::default())
     }
 
     /// As [`GpuRenderer::new`], rendering as `options` say.
+    #[cfg(not(target_arch = "wasm32"))]
     pub fn with_options(options: GpuOptions) -> Result<GpuRenderer, GpuError> {
         pollster::block_on(Self::open(options))
     }
 
-    async fn open(options: GpuOptions) -> Result<GpuRenderer, GpuError> {
+    /// As [`GpuRenderer::with_options`], awaiting the adapter and the device rather than
+    /// blocking on them: the way to open one in a browser, which cannot block.
+    pub async fn open(options: GpuOptions) -> Result<GpuRenderer, GpuError> {
         let adapter = Self::instance()
             .request_adapter(&wgpu::RequestAdapterOptions {
                 power_preference: wgpu::PowerPreference::HighPerformance,
@@ -437,24 +448,15 @@ impl GpuRenderer {
         queue: wgpu::Queue,
         options: GpuOptions,
     ) -> GpuRenderer {
-        let entries: Vec<_> = BINDINGS.iter().enumerate().map(|(k, b)| layout_entry(k as u32, b)).collect();
-        let bind_group_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("raycast bindings"),
-            entries: &entries,
-        });
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("raycast layout"),
-            bind_group_layouts: &[Some(&bind_group_layout)],
-            immediate_size: 0,
-        });
+        let all = device.limits().max_storage_buffers_per_shader_stage >= BINDINGS.len() as u32;
+        let all_bindings = all.then(|| bindings::BindingSet::new(&device, bindings::BindingSet::ALL));
         GpuRenderer {
             limits: device.limits(),
             timestamps: device.features().contains(wgpu::Features::TIMESTAMP_QUERY),
             device,
             queue,
             adapter_info,
-            bind_group_layout,
-            pipeline_layout,
+            all_bindings,
             pipelines: Mutex::new(HashMap::new()),
             options,
         }
@@ -467,7 +469,8 @@ impl GpuRenderer {
     }
 
     /// The device and queue, for a caller that shows what it renders (the live view of
-    /// `-gui`, which presents on the same device).
+    /// `-gui`, which presents on the same device) or catches its errors in error scopes (a
+    /// browser, where they are not raised where they happen).
     pub fn device(&self) -> &wgpu::Device {
         &self.device
     }
@@ -494,6 +497,7 @@ impl GpuRenderer {
     }
 
     /// Renders `scene` into float buffers; see [`crate::image_io`] for images.
+    #[cfg(not(target_arch = "wasm32"))]
     pub fn render(&self, scene: &Scene, options: &RenderOptions) -> Result<Frame, GpuError> {
         let mut frame = Frame::new(options);
         self.render_tiles(scene, options, |first_row, tile| {
@@ -505,6 +509,7 @@ impl GpuRenderer {
 
     /// Renders `scene` in tiles of full rows, top first, handing each to `on_tile` with its
     /// first image row as soon as it is read back: memory is bounded by the tile.
+    #[cfg(not(target_arch = "wasm32"))]
     pub fn render_tiles<E: From<GpuError>>(
         &self,
         scene: &Scene,
@@ -516,6 +521,7 @@ impl GpuRenderer {
 
     /// As [`GpuRenderer::render_tiles`], for image rows `first .. first + rows` only (a band
     /// of a render split across machines); tiles still carry image row numbers.
+    #[cfg(not(target_arch = "wasm32"))]
     pub fn render_band<E: From<GpuError>>(
         &self,
         scene: &Scene,
@@ -537,24 +543,47 @@ impl GpuRenderer {
         lavapipe.then_some(flatten::LOOP_LIMIT)
     }
 
-    fn pipeline(&self, config: KernelConfig) -> wgpu::ComputePipeline {
+    /// The bindings the kernels `stages` of a scene in `file` use: all of them, or where
+    /// the adapter offers fewer ([`bindings`]) those the kernels reference, refused when
+    /// they are still too many.
+    fn bindings_for(&self, stages: &[KernelConfig], file: &std::path::Path) -> Result<bindings::BindingSet, GpuError> {
+        if let Some(all) = &self.all_bindings {
+            return Ok(all.clone());
+        }
+        let mask = stages.iter().fold(0, |mask, &config| mask | bindings::referenced(&Self::kernel(config)));
+        let (count, limit) = (mask.count_ones(), self.limits.max_storage_buffers_per_shader_stage);
+        if count > limit {
+            return Err(GpuError::Unsupported(support::UnsupportedError {
+                file: file.to_path_buf(),
+                location: None,
+                what: format!("its kernel binds {count} storage buffers, more than the {limit} per shader stage this adapter offers"),
+            }));
+        }
+        Ok(bindings::BindingSet::new(&self.device, mask))
+    }
+
+    fn kernel(config: KernelConfig) -> naga::Module {
+        specialise::specialise(shader::module(), &config.constants(), config.entry_point())
+    }
+
+    fn pipeline(&self, config: KernelConfig, bindings: &bindings::BindingSet) -> wgpu::ComputePipeline {
         let mut cache = self.pipelines.lock().unwrap_or_else(|e| e.into_inner());
+        let key = (config, bindings.mask);
         // A compiled kernel holds megabytes on lavapipe; a process that renders many kinds
         // of scene (the random-scene test: hundreds) starts over rather than keep them all.
-        if cache.len() >= MAX_CACHED_PIPELINES && !cache.contains_key(&config) {
+        if cache.len() >= MAX_CACHED_PIPELINES && !cache.contains_key(&key) {
             cache.clear();
         }
         cache
-            .entry(config)
+            .entry(key)
             .or_insert_with(|| {
-                let module = specialise::specialise(shader::module(), &config.constants(), config.entry_point());
                 let module = self.device.create_shader_module(wgpu::ShaderModuleDescriptor {
                     label: Some("raycast"),
-                    source: wgpu::ShaderSource::Naga(std::borrow::Cow::Owned(module)),
+                    source: specialise::shader_source(Self::kernel(config)),
                 });
                 self.device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
                     label: Some("raycast"),
-                    layout: Some(&self.pipeline_layout),
+                    layout: Some(&bindings.pipeline),
                     module: &module,
                     entry_point: Some(config.entry_point()),
                     compilation_options: wgpu::PipelineCompilationOptions {
@@ -583,19 +612,6 @@ impl GpuRenderer {
         let group_rows = (WORKGROUP * BIN_PACKET) as u64;
         let rows = if rows >= group_rows { rows - rows % group_rows } else { rows };
         Ok(rows.min((max_groups - 1) * group_rows) as u32)
-    }
-}
-
-fn layout_entry(index: u32, binding: &Binding) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding: index,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only: !binding.writable },
-            has_dynamic_offset: false,
-            min_binding_size: std::num::NonZeroU64::new(binding.element_bytes),
-        },
-        count: None,
     }
 }
 
@@ -632,13 +648,28 @@ impl Timer {
         encoder.copy_buffer_to_buffer(&self.resolved, 0, &self.readback, 0, 16);
     }
 
+    #[cfg(not(target_arch = "wasm32"))]
     fn elapsed_ns(&self, device: &wgpu::Device, period_ns: f32) -> Result<u64, GpuError> {
         let bytes = read_back(device, &self.readback)?;
-        let ticks: Vec<u64> = bytemuck::pod_collect_to_vec(&bytes);
-        Ok((ticks[1].saturating_sub(ticks[0]) as f64 * period_ns as f64) as u64)
+        Ok(Self::span_ns(&bytes, period_ns))
+    }
+
+    /// As [`Timer::elapsed_ns`], awaiting the map ([`PreparedScene::render_async`]).
+    async fn elapsed_ns_async(&self, gpu: &GpuRenderer, submission: wgpu::SubmissionIndex) -> Result<u64, GpuError> {
+        let slice = self.readback.slice(..);
+        prepared::map_async(&gpu.device, &slice, submission).await?;
+        let bytes = slice.get_mapped_range().map_err(|e| GpuError::Readback(e.to_string()))?.to_vec();
+        self.readback.unmap();
+        Ok(Self::span_ns(&bytes, gpu.queue.get_timestamp_period()))
+    }
+
+    fn span_ns(bytes: &[u8], period_ns: f32) -> u64 {
+        let ticks: Vec<u64> = bytemuck::pod_collect_to_vec(bytes);
+        (ticks[1].saturating_sub(ticks[0]) as f64 * period_ns as f64) as u64
     }
 }
 
+#[cfg(not(target_arch = "wasm32"))]
 fn read_back(device: &wgpu::Device, buffer: &wgpu::Buffer) -> Result<Vec<u8>, GpuError> {
     let slice = buffer.slice(..);
     let (sender, receiver) = std::sync::mpsc::channel();

@@ -4,7 +4,10 @@
 //! Two sets of per-tile buffers take turns: a thread of ours submits tile k + 1 and waits for
 //! it while the caller's thread decodes and writes tile k, so the host's share of the work
 //! (decoding, quantising, writing files) overlaps the device's instead of following it.
+//! In a browser, which has neither the thread nor a blocking wait, [`PreparedScene::render_async`]
+//! renders the tiles one after another and awaits each.
 
+use super::bindings::BindingSet;
 use super::flatten::{GridChoice, SceneBuffers};
 use super::layout::{
     GpuSampling, GpuTexture, Handover, Params, PixelLayout, PACKED_MISS, PERLIN_PERMUTATION, SAMPLE_WORDS, STATS_SLOTS,
@@ -18,7 +21,6 @@ use crate::cpu::Reference;
 use crate::render::{row_tiles, Frame, Output, RayStats, RenderOptions};
 use crate::sampling::Sampling;
 use crate::scene::Scene;
-use std::sync::mpsc::sync_channel;
 use wgpu::util::DeviceExt;
 
 /// A scene ready on the device for one image size and set of outputs.
@@ -86,7 +88,7 @@ impl<'a> PreparedScene<'a> {
         options: &RenderOptions,
         layout: PixelLayout,
     ) -> Result<PreparedScene<'a>, GpuError> {
-        let start = std::time::Instant::now();
+        let start = crate::clock::Instant::now();
         // Refused before any tile is handed out: `auto` then renders with the reference.
         let tree = super::support::check(scene, options).map_err(GpuError::Unsupported)?;
         super::precision::check(scene, options).map_err(GpuError::Precision)?;
@@ -114,7 +116,14 @@ impl<'a> PreparedScene<'a> {
             )));
         }
         let config = KernelConfig::new(&buffers, layout, options, &tree, gpu.loop_limit().is_some());
-        let pipeline = gpu.pipeline(config);
+        let stages = match options.sampling {
+            None => vec![config],
+            Some(_) => {
+                [Stage::Pixels, Stage::Samples, Stage::Filter].map(|stage| KernelConfig { stage, ..config }).to_vec()
+            }
+        };
+        let bindings = gpu.bindings_for(&stages, &scene.path)?;
+        let pipeline = gpu.pipeline(config, &bindings);
         let inputs = upload_inputs(gpu, &buffers)?;
         let mut tile_rows = gpu.tile_rows(options.width, &layout)?;
         let mut sample_bytes = 4;
@@ -140,15 +149,16 @@ impl<'a> PreparedScene<'a> {
                 let rows = (MAX_SAMPLE_BYTES.min(budget) / row_bytes).saturating_sub(overlap).max(1);
                 tile_rows = tile_rows.min(rows as u32);
                 sample_bytes = row_bytes * (tile_rows as u64 + overlap).min(options.height as u64);
-                let stage = |stage| gpu.pipeline(KernelConfig { stage, ..config });
+                let stage = |stage| gpu.pipeline(KernelConfig { stage, ..config }, &bindings);
                 Some(Sampled { sampling, samples: stage(Stage::Samples), filter: stage(Stage::Filter) })
             }
         };
         let tiles = options.height.div_ceil(tile_rows);
         let tile_bytes = options.width as u64 * tile_rows as u64 * layout.words() as u64 * 4;
         let counters = Counters::new(gpu, options.stats);
-        let slots =
-            (0..tiles.min(2)).map(|_| Slot::new(gpu, &inputs, &counters.buffer, tile_bytes, sample_bytes)).collect();
+        let slots = (0..tiles.min(2))
+            .map(|_| Slot::new(gpu, &bindings, &inputs, &counters.buffer, tile_bytes, sample_bytes))
+            .collect();
         let scene_bytes = inputs.iter().flatten().map(|b| b.size()).sum();
         Ok(PreparedScene {
             gpu,
@@ -183,12 +193,16 @@ impl<'a> PreparedScene<'a> {
     }
 
     /// Renders every tile, top first, handing each to `on_tile` on the calling thread.
+    /// (Not in a browser, which has neither threads nor blocking waits: there
+    /// [`PreparedScene::render_async`].)
+    #[cfg(not(target_arch = "wasm32"))]
     pub fn render<E: From<GpuError>>(&self, on_tile: impl FnMut(&ReadTile) -> Result<(), E>) -> Result<RenderStats, E> {
         self.render_band(0, self.options.height, on_tile)
     }
 
     /// As [`PreparedScene::render`], for image rows `first .. first + rows` only (a band of
     /// a render split across machines); tiles still carry image row numbers.
+    #[cfg(not(target_arch = "wasm32"))]
     pub fn render_band<E: From<GpuError>>(
         &self,
         first: u32,
@@ -201,6 +215,7 @@ impl<'a> PreparedScene<'a> {
         let counted = self.counters.zero(self.gpu);
         let again = RenderAgain::default();
         std::thread::scope(|scope| {
+            use std::sync::mpsc::sync_channel;
             let (ready_tx, ready_rx) = sync_channel(self.slots.len());
             let (free_tx, free_rx) = sync_channel::<usize>(self.slots.len());
             for k in 0..self.slots.len() {
@@ -222,23 +237,43 @@ impl<'a> PreparedScene<'a> {
                 let (slot, first_row, rows, kernel_ns) =
                     ready_rx.recv().map_err(|e| GpuError::Readback(e.to_string()))??;
                 let handed = self.hand_over(slot, first_row, rows, &again, &mut on_tile)?;
-                stats.pixels_cut_short += handed.loops_cut;
-                stats.pixels_beyond_reach += handed.beyond_reach;
-                stats.kernel_ns = stats.kernel_ns.zip(kernel_ns).map(|(a, b)| a + b);
-                stats.tiles += 1;
+                stats.add_tile(handed, kernel_ns);
                 // The submitter may already have finished; then nobody needs the slot back.
                 let _ = free_tx.send(slot);
             }
             Ok::<(), E>(())
         })?;
-        if let Some(mut counted) = counted {
-            counted.add(&self.counters.read(self.gpu)?);
-            // The kernel counted the pixels beyond a texture's reach itself, having traced
-            // them to the end, and not those cut short, whose counts are the reference's.
-            if let Some(reference) = again.cut_short.get() {
-                counted.add(&reference.stats());
-            }
-            stats.counted = Some(counted);
+        if let Some(counted) = counted {
+            stats.counted = Some(again.add_counts(counted, self.counters.read(self.gpu)?));
+        }
+        Ok(stats)
+    }
+
+    /// As [`PreparedScene::render`], the tiles one after another on the calling task, each
+    /// read back by awaiting its map: the path for a browser, where a map resolves only once
+    /// control returns to the page's event loop and no thread can wait for it. The pixels
+    /// the kernel hands over are rendered again by the reference, as in
+    /// [`PreparedScene::render_band`].
+    pub async fn render_async<E: From<GpuError>>(
+        &self,
+        mut on_tile: impl FnMut(&ReadTile) -> Result<(), E>,
+    ) -> Result<RenderStats, E> {
+        let mut stats = self.stats;
+        let counted = self.counters.zero(self.gpu);
+        let again = RenderAgain::default();
+        for (first_row, rows) in row_tiles(self.options.height, self.tile_rows) {
+            let submission = self.submit_tile(0, first_row, rows);
+            let slot = &self.slots[0];
+            map_async(&self.gpu.device, &slot.readback.slice(..self.tile_bytes(rows)), submission.clone()).await?;
+            let kernel_ns = match &slot.timer {
+                Some(timer) => Some(timer.elapsed_ns_async(self.gpu, submission).await?),
+                None => None,
+            };
+            let handed = self.hand_over(0, first_row, rows, &again, &mut on_tile)?;
+            stats.add_tile(handed, kernel_ns);
+        }
+        if let Some(counted) = counted {
+            stats.counted = Some(again.add_counts(counted, self.counters.read_async(self.gpu).await?));
         }
         Ok(stats)
     }
@@ -323,7 +358,19 @@ impl<'a> PreparedScene<'a> {
 
     /// Dispatches one tile into `slot`, copies it to the slot's readback buffer and waits
     /// until that is mapped; returns the kernel time where the adapter measures it.
+    #[cfg(not(target_arch = "wasm32"))]
     fn run_tile(&self, slot: usize, first_row: u32, rows: u32) -> Result<Option<u64>, GpuError> {
+        let submission = self.submit_tile(slot, first_row, rows);
+        let s = &self.slots[slot];
+        map_and_wait(&self.gpu.device, &s.readback.slice(..self.tile_bytes(rows)), submission)?;
+        match &s.timer {
+            Some(timer) => Ok(Some(timer.elapsed_ns(&self.gpu.device, self.gpu.queue.get_timestamp_period())?)),
+            None => Ok(None),
+        }
+    }
+
+    /// Dispatches one tile into `slot` and copies it to the slot's readback buffer.
+    fn submit_tile(&self, slot: usize, first_row: u32, rows: u32) -> wgpu::SubmissionIndex {
         let gpu = self.gpu;
         let s = &self.slots[slot];
         let params = Params { first_row, tile_rows: rows, ..self.params };
@@ -381,18 +428,14 @@ impl<'a> PreparedScene<'a> {
         if let Some(timer) = &s.timer {
             timer.resolve(&mut encoder);
         }
-        let submission = gpu.queue.submit([encoder.finish()]);
-        map_and_wait(&gpu.device, &s.readback.slice(..size), submission.clone())?;
-        match &s.timer {
-            Some(timer) => Ok(Some(timer.elapsed_ns(&gpu.device, gpu.queue.get_timestamp_period())?)),
-            None => Ok(None),
-        }
+        gpu.queue.submit([encoder.finish()])
     }
 }
 
 impl Slot {
     fn new(
         gpu: &GpuRenderer,
+        bindings: &BindingSet,
         inputs: &[Option<wgpu::Buffer>; BINDINGS.len()],
         counters: &wgpu::Buffer,
         tile_bytes: u64,
@@ -413,6 +456,7 @@ impl Slot {
         let samples = buffer("samples", sample_bytes, U::STORAGE);
         let sampling = buffer("sampling", std::mem::size_of::<GpuSampling>() as u64, U::STORAGE | U::COPY_DST);
         let entries: Vec<_> = (0..BINDINGS.len())
+            .filter(|&k| bindings.contains(k))
             .map(|k| {
                 let resource = match k {
                     0 => &params,
@@ -427,7 +471,7 @@ impl Slot {
             .collect();
         let bind_group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("raycast"),
-            layout: &gpu.bind_group_layout,
+            layout: &bindings.group,
             entries: &entries,
         });
         let timer = gpu.timestamps.then(|| Timer::new(&gpu.device));
@@ -467,13 +511,29 @@ impl Counters {
     }
 
     /// What the kernel counted since [`Counters::zero`], once its tiles are done.
+    #[cfg(not(target_arch = "wasm32"))]
     fn read(&self, gpu: &GpuRenderer) -> Result<RayStats, GpuError> {
+        let (readback, submission) = self.copy_to_readback(gpu);
+        map_and_wait(&gpu.device, &readback.slice(..), submission)?;
+        Self::sum_mapped(readback)
+    }
+
+    /// As [`Counters::read`], awaiting the map ([`PreparedScene::render_async`]).
+    async fn read_async(&self, gpu: &GpuRenderer) -> Result<RayStats, GpuError> {
+        let (readback, submission) = self.copy_to_readback(gpu);
+        map_async(&gpu.device, &readback.slice(..), submission).await?;
+        Self::sum_mapped(readback)
+    }
+
+    fn copy_to_readback(&self, gpu: &GpuRenderer) -> (&wgpu::Buffer, wgpu::SubmissionIndex) {
         let readback = self.readback.as_ref().expect("read only where counted");
         let mut encoder =
             gpu.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("counters") });
         encoder.copy_buffer_to_buffer(&self.buffer, 0, readback, 0, Self::WORDS * 4);
-        let submission = gpu.queue.submit([encoder.finish()]);
-        map_and_wait(&gpu.device, &readback.slice(..), submission)?;
+        (readback, gpu.queue.submit([encoder.finish()]))
+    }
+
+    fn sum_mapped(readback: &wgpu::Buffer) -> Result<RayStats, GpuError> {
         let counted = {
             let view = readback.slice(..).get_mapped_range().map_err(|e| GpuError::Readback(e.to_string()))?;
             super::layout::sum_counters(bytemuck::cast_slice(&view))
@@ -546,6 +606,7 @@ fn non_empty<T: bytemuck::Pod>(items: &[T]) -> &[u8] {
 }
 
 /// Maps `slice` for reading once `submission` is done, blocking until it is.
+#[cfg(not(target_arch = "wasm32"))]
 pub(super) fn map_and_wait(
     device: &wgpu::Device,
     slice: &wgpu::BufferSlice,
@@ -559,6 +620,24 @@ pub(super) fn map_and_wait(
         .poll(wgpu::PollType::Wait { submission_index: Some(submission), timeout: None })
         .map_err(|e| GpuError::Readback(e.to_string()))?;
     receiver.recv().map_err(|e| GpuError::Readback(e.to_string()))?.map_err(|e| GpuError::Readback(e.to_string()))
+}
+
+/// Maps `slice` for reading once `submission` is done, without blocking. Natively the poll
+/// waits for the device and the map is resolved when it returns; in a browser polling does
+/// nothing, and the map resolves once control returns to the page's event loop, which
+/// awaiting gives it.
+pub(super) async fn map_async(
+    device: &wgpu::Device,
+    slice: &wgpu::BufferSlice<'_>,
+    submission: wgpu::SubmissionIndex,
+) -> Result<(), GpuError> {
+    let mapped = super::handoff::Handoff::default();
+    let sender = mapped.clone();
+    slice.map_async(wgpu::MapMode::Read, move |result| sender.send(result));
+    device
+        .poll(wgpu::PollType::Wait { submission_index: Some(submission), timeout: None })
+        .map_err(|e| GpuError::Readback(e.to_string()))?;
+    mapped.await.map_err(|e| GpuError::Readback(e.to_string()))
 }
 
 impl ReadTile<'_> {
@@ -614,6 +693,29 @@ fn rgb_of(words: impl Iterator<Item = u32>) -> Vec<u8> {
 struct HandedOver {
     loops_cut: u64,
     beyond_reach: u64,
+}
+
+impl RenderStats {
+    /// Counts one tile read back: its pixels handed over, by why, and its kernel time.
+    fn add_tile(&mut self, handed: HandedOver, kernel_ns: Option<u64>) {
+        self.pixels_cut_short += handed.loops_cut;
+        self.pixels_beyond_reach += handed.beyond_reach;
+        self.kernel_ns = self.kernel_ns.zip(kernel_ns).map(|(a, b)| a + b);
+        self.tiles += 1;
+    }
+}
+
+impl RenderAgain<'_> {
+    /// `-stats` of a whole render: what the kernel counted, and the reference's counts
+    /// for the pixels cut short. The kernel counted the pixels beyond a texture's reach
+    /// itself, having traced them to the end, and not those cut short.
+    fn add_counts(&self, mut counted: RayStats, kernel: RayStats) -> RayStats {
+        counted.add(&kernel);
+        if let Some(reference) = self.cut_short.get() {
+            counted.add(&reference.stats());
+        }
+        counted
+    }
 }
 
 /// The references that render handed-over pixels again, each built once per band, when

@@ -47,6 +47,24 @@ pub fn specialise(module: &Module, constants: &[(&str, f64)], entry_point: &str)
     module
 }
 
+/// The kernel as wgpu takes it: naga's IR.
+#[cfg(not(target_arch = "wasm32"))]
+pub fn shader_source(module: Module) -> wgpu::ShaderSource<'static> {
+    wgpu::ShaderSource::Naga(std::borrow::Cow::Owned(module))
+}
+
+/// The kernel as a browser takes it: WGSL. wgpu would write it with naga, which spells
+/// `f32::MAX` `340282350000000000000000000000000000000f`, and Chromium's Tint refuses
+/// that ("value cannot be represented as 'f32'": the decimal lies above `f32::MAX` before
+/// rounding). The same value in hexadecimal is exact.
+#[cfg(target_arch = "wasm32")]
+pub fn shader_source(module: Module) -> wgpu::ShaderSource<'static> {
+    let info = validate(&module);
+    let wgsl = naga::back::wgsl::write_string(&module, &info, naga::back::wgsl::WriterFlags::empty())
+        .unwrap_or_else(|e| panic!("naga writes the kernel as WGSL: {e}"));
+    wgpu::ShaderSource::Wgsl(std::borrow::Cow::Owned(wgsl.replace(&format!("{}f", f32::MAX), "0x1.fffffep+127f")))
+}
+
 fn validate(module: &Module) -> naga::valid::ModuleInfo {
     naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::all())
         .validate(module)

@@ -14,10 +14,10 @@
 //! `ranges` entry `[0, count]`, and no references.
 
 use super::flatten::GpuGrid;
+use crate::clock::Instant;
 use crate::grid::{Footprint, Grid, GridSize};
 use crate::scene::{for_each_leaf, Bounds, Scene, Shape};
 use glam::{DMat4, DVec3};
-use std::time::Instant;
 
 /// The voxel grid of `scene` at `size`, its corner moved by `-camera_center` as the
 /// kernel's coordinates are (docs/SPEC.md §3; gpu::flatten).

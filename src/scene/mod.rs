@@ -16,5 +16,7 @@ pub mod walk;
 pub use error::{SceneError, SceneWarning};
 pub use model::*;
 pub use obj::{load_obj, parse_obj};
-pub use parser::{load_scene, parse_scene, MAX_NESTING, MAX_OCTAVES, MAX_TEXTURE_NESTING};
+pub use parser::{
+    load_scene, obj_file_names, parse_scene, parse_scene_with, ObjFiles, MAX_NESTING, MAX_OCTAVES, MAX_TEXTURE_NESTING,
+};
 pub use walk::{for_each_leaf, try_for_each_leaf, Leaf};

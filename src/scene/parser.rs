@@ -13,7 +13,7 @@ use super::model::{
     Background, Camera, DirectionalLight, Light, Location, Material, Mesh, Object, PointLight, Projection, Scene,
     Shape, Texture, TextureKind,
 };
-use super::obj::load_obj;
+use super::obj::{load_obj, parse_obj};
 use glam::{DMat3, DMat4, DVec3, DVec4};
 use std::collections::HashMap;
 use std::fs;
@@ -41,7 +41,37 @@ pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
 /// `Matrix { … }`, which pre-multiplies (`M = Matrix · M_so_far`) as the course's reference
 /// parser does: `Translate 1 0 0 Matrix {…}` applies the translation first, then the matrix.
 pub fn parse_scene(text: &str, path: &Path) -> Result<Scene, SceneError> {
-    Parser::new(text, path).scene()
+    parse_scene_with(text, path, ObjFiles::Disk)
+}
+
+/// As [`parse_scene`], reading the `obj_file`s from `files`: the same grammar, the same
+/// path resolution and the same located errors, whether the meshes are on disk or held in
+/// memory (a browser's dropped or fetched files, docs/SPEC.md §10).
+pub fn parse_scene_with(text: &str, path: &Path, files: ObjFiles) -> Result<Scene, SceneError> {
+    Parser::new(text, path, files).scene()
+}
+
+/// Where a scene's `obj_file`s are read from.
+#[derive(Clone, Copy, Debug)]
+pub enum ObjFiles<'a> {
+    /// The file system (the command line).
+    Disk,
+    /// Texts by path, as [`parse_scene`] would resolve them on disk (the scene's folder
+    /// joined with the name, then the name alone); a path not in the map does not exist.
+    Memory(&'a HashMap<PathBuf, String>),
+}
+
+/// The names the scene's `obj_file`s give, in file order, as written (a page fetches them
+/// before parsing; a name that is not a mesh path is left to the parser to report).
+pub fn obj_file_names(text: &str) -> Vec<String> {
+    let mut lexer = Lexer::new(text);
+    let mut names = Vec::new();
+    while let Some(token) = lexer.next_token() {
+        if token.text == "obj_file" {
+            names.extend(lexer.next_token().map(|name| name.text.to_string()));
+        }
+    }
+    names
 }
 
 type Result<T, E = SceneError> = std::result::Result<T, E>;
@@ -170,6 +200,7 @@ impl Count<'_> {
 struct Parser<'a> {
     lexer: Lexer<'a>,
     path: &'a Path,
+    files: ObjFiles<'a>,
     /// `numMaterials`, once the `Materials` block has been read.
     material_count: Option<usize>,
     /// The material of the last `MaterialIndex`: it applies to every following object in
@@ -183,10 +214,11 @@ struct Parser<'a> {
 }
 
 impl<'a> Parser<'a> {
-    fn new(text: &'a str, path: &'a Path) -> Self {
+    fn new(text: &'a str, path: &'a Path, files: ObjFiles<'a>) -> Self {
         Parser {
             lexer: Lexer::new(text),
             path,
+            files,
             material_count: None,
             current_material: None,
             unchecked_material_refs: Vec::new(),
@@ -940,11 +972,18 @@ impl<'a> Parser<'a> {
     /// Loads (or reuses) the mesh named by `token`.
     fn mesh(&mut self, token: Token) -> Result<Arc<Mesh>> {
         let path = self.resolve_obj_path(token)?;
-        let key = fs::canonicalize(&path).unwrap_or_else(|_| path.clone());
+        let key = match self.files {
+            ObjFiles::Disk => fs::canonicalize(&path).unwrap_or_else(|_| path.clone()),
+            ObjFiles::Memory(_) => path.clone(),
+        };
         if let Some(mesh) = self.meshes.get(&key) {
             return Ok(Arc::clone(mesh));
         }
-        let mesh = Arc::new(load_obj(&path).map_err(|mut error| {
+        let loaded = match self.files {
+            ObjFiles::Disk => load_obj(&path),
+            ObjFiles::Memory(files) => parse_obj(&files[&path], &path),
+        };
+        let mesh = Arc::new(loaded.map_err(|mut error| {
             let Location { line, col } = token.location;
             error.message = format!("{} (obj_file of {}:{line}:{col})", error.message, self.path.display());
             error
@@ -960,10 +999,15 @@ impl<'a> Parser<'a> {
         let folder = self.path.parent().unwrap_or(Path::new(""));
         let mut not_regular = None;
         for candidate in [folder.join(name), name.to_path_buf()] {
-            match fs::metadata(&candidate) {
-                Ok(metadata) if metadata.is_file() => return Ok(candidate),
-                Ok(_) => not_regular = not_regular.or(Some(candidate)),
-                Err(_) => {}
+            // Some(whether it is a regular file), None where nothing is there.
+            let is_file = match self.files {
+                ObjFiles::Disk => fs::metadata(&candidate).ok().map(|m| m.is_file()),
+                ObjFiles::Memory(files) => files.contains_key(&candidate).then_some(true),
+            };
+            match is_file {
+                Some(true) => return Ok(candidate),
+                Some(false) => not_regular = not_regular.or(Some(candidate)),
+                None => {}
             }
         }
         let message = match not_regular {
