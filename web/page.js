@@ -103,11 +103,16 @@ function fail(error) {
   return text;
 }
 
+// The scene the page now shows, named on the page; Render renders it again.
+function hold(loaded) {
+  scene = loaded;
+  $("scene").textContent = `Scene: ${scene.path}` + (scene.files.size ? ` with ${[...scene.files.keys()].join(", ")}` : "");
+  $("render").disabled = false;
+}
+
 async function use(load) {
   try {
-    scene = await load();
-    $("scene").textContent = `Scene: ${scene.path}` + (scene.files.size ? ` with ${[...scene.files.keys()].join(", ")}` : "");
-    $("render").disabled = false;
+    hold(await load());
     await renderScene();
   } catch (error) {
     fail(error);
@@ -163,7 +168,7 @@ async function hook(params) {
   $("shadows").checked = params.get("shadows") === "1";
   $("bounces").value = params.get("bounces") ?? "0";
   [$("depth_min").value, $("depth_max").value] = (params.get("depth") ?? ",").split(",");
-  scene = await fetchScene(params.get("scene"));
+  hold(await fetchScene(params.get("scene")));
   await renderScene();
 }
 

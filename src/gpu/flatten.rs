@@ -79,14 +79,14 @@ pub struct GpuBvh {
 
 impl SceneBuffers {
     /// Flattens `scene` for the image `rays` describes, with a hierarchy when it has at
-    /// least `bvh_min_primitives` spheres, ellipsoids and triangles. With `secondary_rays`
-    /// (shadow, reflected or refracted rays) no bins, which hold primary rays only: every
-    /// ray then walks the hierarchy.
+    /// least `bvh_min_primitives` spheres, ellipsoids and triangles. With `no_bins` (shadow,
+    /// reflected or refracted rays, which bins do not hold; or a single sample a pixel, quicker
+    /// through the hierarchy) every ray walks the hierarchy.
     pub fn new(
         scene: &Scene,
         rays: &PrimaryRays,
         options: &GpuOptions,
-        secondary_rays: bool,
+        no_bins: bool,
         grid: Option<GridChoice>,
     ) -> SceneBuffers {
         let mut buffers = SceneBuffers { orthographic: rays.orthographic, ..Default::default() };
@@ -96,7 +96,7 @@ impl SceneBuffers {
             // An explicit grid means the grid (docs/SPEC.md §7).
             Some(GridChoice::Walk(size)) => buffers.grid = Some(GpuGrid::build(&buffers, size)),
             Some(GridChoice::Given(grid)) => buffers.grid = Some(grid),
-            None => buffers.choose_acceleration(rays, options, secondary_rays),
+            None => buffers.choose_acceleration(rays, options, no_bins),
         }
         if let Some(bvh) = buffers.bvh.as_ref().filter(|b| b.prim_refs.is_empty()) {
             buffers.triangles = bvh.order.iter().map(|&p| buffers.triangles[p as usize]).collect();
@@ -152,9 +152,9 @@ impl SceneBuffers {
     }
 
     /// Bins, a hierarchy or flat loops: what `options` asks for, or with
-    /// [`Acceleration::Auto`] the cost model's choice; with `secondary_rays`, the hierarchy
+    /// [`Acceleration::Auto`] the cost model's choice; with `no_bins`, the hierarchy
     /// where bins were asked for.
-    fn choose_acceleration(&mut self, rays: &PrimaryRays, options: &GpuOptions, secondary_rays: bool) {
+    fn choose_acceleration(&mut self, rays: &PrimaryRays, options: &GpuOptions, no_bins: bool) {
         let finite = self.triangles.len() + self.spheres.len() + self.ellipsoids.len();
         let auto = options.acceleration == Acceleration::Auto;
         if finite == 0 || options.acceleration == Acceleration::Flat || (auto && finite < options.bvh_min_primitives) {
@@ -162,7 +162,7 @@ impl SceneBuffers {
         }
         let pixels = rays.width as u64 * rays.height as u64;
         let bins_asked = options.acceleration == Acceleration::Bins || (auto && pixels >= BINS_MIN_PIXELS);
-        if bins_asked && !secondary_rays {
+        if bins_asked && !no_bins {
             let candidates = binning::candidates(&self.triangles, &self.sphere_bounds, &self.ellipsoid_bounds);
             let forced = options.acceleration == Acceleration::Bins;
             self.bins = Bins::build(rays, &self.triangles, &candidates, |lengths| {
