@@ -32,6 +32,10 @@ use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
 use winit::keyboard::{Key, NamedKey};
 use winit::window::{Window, WindowId};
 
+/// The side of the frame [`LiveView::warm_up`] renders: small, and below the size from
+/// which the cost model takes bins.
+const WARM_UP_SIDE: u32 = 32;
+
 /// How long the view waits after the last move before rendering at full size.
 const SETTLE: Duration = Duration::from_millis(150);
 
@@ -107,6 +111,8 @@ struct LiveView<'a> {
     /// The scales rendered at so far: the first frame at each may compile a kernel variant,
     /// and its time says nothing of the frames to come.
     scales_seen: Vec<u32>,
+    /// Whether the kernel of the frames rendered while moving has been compiled.
+    warmed: bool,
     timings: Timings,
     ended: Option<Ended>,
 }
@@ -130,6 +136,7 @@ impl<'a> LiveView<'a> {
             moved: None,
             full_frame: Duration::ZERO,
             scales_seen: Vec::new(),
+            warmed: false,
             timings: Timings::default(),
             ended: None,
         }
@@ -184,6 +191,22 @@ impl<'a> LiveView<'a> {
         self.timings.add(scale, took);
         if self.verbose && shown {
             say(&format!("gui: {} frame {w}x{h} in {:.1} ms", self.output.name(), took.as_secs_f64() * 1e3));
+        }
+        Ok(())
+    }
+
+    /// Once the first frame is shown, a tiny frame, thrown away, compiles the kernel variant
+    /// of the small frames rendered while the camera moves (below 512² the cost model
+    /// walks the hierarchy rather than bins), so that the first drag does not wait for it.
+    fn warm_up(&mut self) -> Result<(), Failure> {
+        let Some((_, backend)) = self.screen.as_ref() else { return Ok(()) };
+        self.warmed = true;
+        let start = Instant::now();
+        let mut scene = self.scene.clone();
+        scene.camera = self.orbit.camera();
+        render_view(backend, &scene, self.args, self.output, (WARM_UP_SIDE, WARM_UP_SIDE))?;
+        if self.verbose {
+            say(&format!("gui: compiled the moving frames' kernel in {:.0} ms", start.elapsed().as_secs_f64() * 1e3));
         }
         Ok(())
     }
@@ -328,6 +351,12 @@ impl ApplicationHandler for LiveView<'_> {
 
     /// Once the camera has been still for [`SETTLE`], one more frame at full size.
     fn about_to_wait(&mut self, event_loop: &ActiveEventLoop) {
+        let idle = self.moved.is_none() && self.drag.is_none();
+        if idle && !self.warmed && !self.scales_seen.is_empty() {
+            if let Err(failure) = self.warm_up() {
+                return self.fail(event_loop, failure);
+            }
+        }
         match self.moved {
             Some(t) if self.drag.is_none() && t.elapsed() >= SETTLE => {
                 self.moved = None;
