@@ -226,10 +226,22 @@ impl LiveView {
         }
     }
 
-    /// The window's pixels as the X server holds them.
+    /// The window's pixels as the X server holds them, once they hold still: the frame was
+    /// presented before its line was written, but the server may show it a moment later.
     fn screenshot(&self) -> image::RgbImage {
-        // The frame was presented before its line was written; give the server a moment.
-        std::thread::sleep(Duration::from_millis(300));
+        let mut last = self.grab();
+        for _ in 0..20 {
+            std::thread::sleep(Duration::from_millis(200));
+            let next = self.grab();
+            if next == last {
+                return next;
+            }
+            last = next;
+        }
+        panic!("the window's pixels kept changing for 4 s");
+    }
+
+    fn grab(&self) -> image::RgbImage {
         let output =
             Command::new("xwd").args(["-silent", "-id", &self.id]).env("DISPLAY", &self.display).output().unwrap();
         assert!(output.status.success(), "xwd: {}", String::from_utf8_lossy(&output.stderr));
