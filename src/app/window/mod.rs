@@ -176,9 +176,7 @@ impl<'a> LiveView<'a> {
         let scale = if moving { moving_scale(self.full_frame) } else { 1 };
         let (w, h) = (width.div_ceil(scale), height.div_ceil(scale));
         let start = Instant::now();
-        let mut scene = self.scene.clone();
-        scene.camera = self.orbit.camera();
-        let rgb = render_view(backend, &scene, self.args, self.output, (w, h))?;
+        let rgb = render_view(backend, &self.scene, self.args, self.output, (w, h))?;
         let shown = screen.show(&enlarge(&rgb, (w, h), (width, height)));
         let took = start.elapsed();
         if self.scales_seen.contains(&scale) || self.scales_seen.is_empty() {
@@ -199,12 +197,10 @@ impl<'a> LiveView<'a> {
     /// of the small frames rendered while the camera moves (below 512² the cost model
     /// walks the hierarchy rather than bins), so that the first drag does not wait for it.
     fn warm_up(&mut self) -> Result<(), Failure> {
-        let Some((_, backend)) = self.screen.as_ref() else { return Ok(()) };
         self.warmed = true;
+        let Some((_, backend)) = self.screen.as_ref() else { return Ok(()) };
         let start = Instant::now();
-        let mut scene = self.scene.clone();
-        scene.camera = self.orbit.camera();
-        render_view(backend, &scene, self.args, self.output, (WARM_UP_SIDE, WARM_UP_SIDE))?;
+        render_view(backend, &self.scene, self.args, self.output, (WARM_UP_SIDE, WARM_UP_SIDE))?;
         if self.verbose {
             say(&format!("gui: compiled the moving frames' kernel in {:.0} ms", start.elapsed().as_secs_f64() * 1e3));
         }
@@ -218,9 +214,7 @@ impl<'a> LiveView<'a> {
             say("gui: nothing to write: the command line names no -output, -normals or -depth");
             return Ok(());
         }
-        let mut scene = self.scene.clone();
-        scene.camera = self.orbit.camera();
-        let report = job::run_loaded(scene, 0.0, self.args, backend, false)?;
+        let report = job::run_loaded(self.scene.clone(), 0.0, self.args, backend, false)?;
         if let Some(notice) = &report.notice {
             say(&format!("warning: {notice}"));
         }
@@ -306,7 +300,9 @@ impl<'a> LiveView<'a> {
         }
     }
 
+    /// The orbit moved the camera: the scene every later frame and `r` render follows it.
     fn camera_moved(&mut self) {
+        self.scene.camera = self.orbit.camera();
         self.moved = Some(Instant::now());
         self.request_redraw();
     }
