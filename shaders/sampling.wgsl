@@ -83,7 +83,13 @@ fn main_samples(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let j = P.height - 1u - (sampling.first_row + r);
     let ray = primary_ray_at(i, j, sample_position(i, j, k));
-    let shaded = shade_pixel(ray, closest_hit(ray, t_min()));
+    // -visualize_grid's picture (grid.wgsl's voxels), sample by sample, as `main` draws it.
+    var shaded: Shaded;
+    if (VOXELS) {
+        shaded = voxel_pixel(ray);
+    } else {
+        shaded = shade_pixel(ray, closest_hit(ray, t_min()));
+    }
     let cut = LOOP_CANARY && loops_were_cut();
     write_sample(i, r, k, shaded, cut);
     flush_sample_counts(id, r, cut);

@@ -475,8 +475,23 @@ fn sampling_with_textures_shadows_bounces_grids_and_stats() {
     let dir = tempfile::tempdir().unwrap();
     common::copy_course_folder(&corpus, "a6", dir.path());
     common::copy_course_folder(&corpus, "a7", dir.path());
-    let lines: [&[&str]; 2] = [
+    let lines: [&[&str]; 3] = [
         &["-input", "scene6_15_marble_cubes.txt", "-size", "120", "120", "-jittered_samples", "4", "-tent_filter", "1"],
+        // The voxel picture, sampled: the GPU drew the objects' background here before.
+        &[
+            "-input",
+            "scene6_15_marble_cubes.txt",
+            "-size",
+            "100",
+            "100",
+            "-grid",
+            "8",
+            "8",
+            "8",
+            "-visualize_grid",
+            "-uniform_samples",
+            "4",
+        ],
         &[
             "-input",
             "scene7_06_faceted_gem.txt",
