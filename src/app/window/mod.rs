@@ -198,7 +198,8 @@ impl<'a> LiveView<'a> {
     /// walks the hierarchy rather than bins), so that the first drag does not wait for it.
     fn warm_up(&mut self) -> Result<(), Failure> {
         self.warmed = true;
-        let Some((_, backend)) = self.screen.as_ref() else { return Ok(()) };
+        // The reference compiles nothing.
+        let Some((_, backend @ Backend::Gpu(..))) = self.screen.as_ref() else { return Ok(()) };
         let start = Instant::now();
         render_view(backend, &self.scene, self.args, self.output, (WARM_UP_SIDE, WARM_UP_SIDE))?;
         if self.verbose {
