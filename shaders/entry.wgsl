@@ -89,26 +89,6 @@ fn stats_slot(id: vec3<u32>) -> u32 {
     return id.x + WORKGROUP * id.y;
 }
 
-// Ray q of the packet (bins.wgsl) starts with its nearest plane; it is counted where it is
-// a pixel's or a sample's, not where it only fills the packet.
-fn start_packet_ray(q: u32, ray: Ray, counted: bool, tmin: f32) {
-    packet_rays[q] = ray;
-    if (counted) {
-        count(COUNT_RAYS);
-    }
-    packet_hits[q] = closest_plane(ray, tmin);
-}
-
-// The packet's rays, each shaded at its closest hit among bin `bin`'s candidates.
-fn shade_packet(bin: u32, tmin: f32) -> array<Shaded, PACKET> {
-    walk_bin_packet(bin, tmin);
-    var shaded: array<Shaded, PACKET>;
-    for (var q = 0u; q < PACKET; q++) {
-        shaded[q] = shade_pixel(packet_rays[q], packet_hits[q]);
-    }
-    return shaded;
-}
-
 // Image rows base + PACKET·y … + PACKET − 1, where base is the tile's first row rounded
 // down to a multiple of PACKET, so that a packet never straddles two bins (BIN_SIDE rows, a
 // multiple of PACKET) whatever the tile.
@@ -123,11 +103,19 @@ fn main_bins(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let tmin = t_min();
     for (var r = 0u; r < PACKET; r++) {
+        packet_rays[r] = ray_of_row(i, base + r);
         // A row outside the tile is traced with its packet but not a pixel of it: its ray
         // is not counted (its tests are: the kernel ran them).
-        start_packet_ray(r, ray_of_row(i, base + r), u32(first + i32(r)) < P.tile_rows, tmin);
+        if (u32(first + i32(r)) < P.tile_rows) {
+            count(COUNT_RAYS);
+        }
+        packet_hits[r] = closest_plane(packet_rays[r], tmin);
     }
-    let shaded = shade_packet((base / BIN_SIDE) * P.bin_columns + i / BIN_SIDE, tmin);
+    walk_bin_packet((base / BIN_SIDE) * P.bin_columns + i / BIN_SIDE, tmin);
+    var shaded: array<Shaded, PACKET>;
+    for (var r = 0u; r < PACKET; r++) {
+        shaded[r] = shade_pixel(packet_rays[r], packet_hits[r]);
+    }
     // One canary for the invocation, after all of its loops: past the limit only the first
     // canary runs short, a second one runs in full (tests/loop_limit.rs found the packet's
     // last three rows wrong and unmarked with one canary per row).

@@ -113,9 +113,17 @@ fn main_samples_bins(@builtin(global_invocation_id) id: vec3<u32>) {
     let tmin = t_min();
     for (var q = 0u; q < PACKET; q++) {
         let k = min(first + q, sampling.count - 1u);
-        start_packet_ray(q, primary_ray_at(i, j, sample_position(i, j, k)), first + q < sampling.count, tmin);
+        packet_rays[q] = primary_ray_at(i, j, sample_position(i, j, k));
+        if (first + q < sampling.count) {
+            count(COUNT_RAYS);
+        }
+        packet_hits[q] = closest_plane(packet_rays[q], tmin);
     }
-    let shaded = shade_packet((image_row / BIN_SIDE) * P.bin_columns + i / BIN_SIDE, tmin);
+    walk_bin_packet((image_row / BIN_SIDE) * P.bin_columns + i / BIN_SIDE, tmin);
+    var shaded: array<Shaded, PACKET>;
+    for (var q = 0u; q < PACKET; q++) {
+        shaded[q] = shade_pixel(packet_rays[q], packet_hits[q]);
+    }
     // One canary after all of the invocation's loops, as in main_bins.
     let cut = LOOP_CANARY && loops_were_cut();
     for (var q = 0u; q < PACKET; q++) {

@@ -106,8 +106,11 @@ struct LiveView<'a> {
     /// The camera moved at this time; the view renders small until [`SETTLE`] has passed.
     moved: Option<Instant>,
     /// What a full-size frame takes, from the last frame's time, from which the size of
-    /// moving frames follows; zero before the first frame.
+    /// moving frames follows.
     full_frame: Duration,
+    /// The scales rendered at so far: the first frame at each may compile a kernel variant,
+    /// and its time says nothing of the frames to come.
+    scales_seen: Vec<u32>,
     /// Whether the kernel of the frames rendered while moving has been compiled.
     warmed: bool,
     timings: Timings,
@@ -132,6 +135,7 @@ impl<'a> LiveView<'a> {
             drag: None,
             moved: None,
             full_frame: Duration::ZERO,
+            scales_seen: Vec::new(),
             warmed: false,
             timings: Timings::default(),
             ended: None,
@@ -175,8 +179,13 @@ impl<'a> LiveView<'a> {
         let rgb = render_view(backend, &self.scene, self.args, self.output, (w, h))?;
         let shown = screen.show(&enlarge(&rgb, (w, h), (width, height)));
         let took = start.elapsed();
-        // A frame's time goes with its pixels.
-        self.full_frame = took * scale * scale;
+        if self.scales_seen.contains(&scale) || self.scales_seen.is_empty() {
+            // A frame's time goes with its pixels.
+            self.full_frame = took * scale * scale;
+        }
+        if !self.scales_seen.contains(&scale) {
+            self.scales_seen.push(scale);
+        }
         self.timings.add(scale, took);
         if self.verbose && shown {
             say(&format!("gui: {} frame {w}x{h} in {:.1} ms", self.output.name(), took.as_secs_f64() * 1e3));
@@ -340,7 +349,7 @@ impl ApplicationHandler for LiveView<'_> {
     /// Once the camera has been still for [`SETTLE`], one more frame at full size.
     fn about_to_wait(&mut self, event_loop: &ActiveEventLoop) {
         let idle = self.moved.is_none() && self.drag.is_none();
-        if idle && !self.warmed && !self.full_frame.is_zero() {
+        if idle && !self.warmed && !self.scales_seen.is_empty() {
             if let Err(failure) = self.warm_up() {
                 return self.fail(event_loop, failure);
             }
