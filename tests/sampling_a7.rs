@@ -203,22 +203,30 @@ fn random_and_jittered_images_follow_their_seed() {
 }
 
 /// The course's images of assignment 7: `filter7_01e` (tent 1.7), `filter7_01f` (gaussian
-/// 1.7) and `output7_01_low_res` within 1 level on 99.9 % of their pixels on both backends
-/// (the pictures of filters are the app's, whatever the backend). `output7_03a` (no
-/// sampling: the marble vase on a noise plane) matches but for rows 62–72, where the noise
-/// plane nears the horizon and its octaves are far finer than a pixel: there the pixels are
-/// counted and printed (581, on both backends), and elsewhere held to the contract. Not
-/// f32 rounding: the reference with the course's float hit points, texture matrix or
-/// primary rays still has 581 there, so the course computes something differently for the
-/// far plane, which is not found yet (issue 17). `output7_03b` (jittered: the course's random positions are its
-/// own) is printed only. Where the kernel refuses a line (the noise plane's texture
-/// coordinates, seen in perspective up to the horizon, are past its f32 range), the refusal
-/// is printed and the GPU has no image.
+/// 1.7), `output7_01_low_res` and `output7_03a` within 1 level on 99.9 % of their pixels on
+/// both backends (the pictures of filters are the app's, whatever the backend).
+/// `output7_03a`'s noise plane runs to the horizon, where which octave of noise a pixel
+/// shows depends on the ray's angle to a few units of f32's last place, which the course's
+/// float camera does not keep: there it is held to the contract only on the pixels that
+/// [`turned_by_rounding`] does not flag, and the flagged ones are counted, printed and
+/// bounded. `output7_03b` (jittered: the course's random positions are its own) is printed
+/// only. Where the kernel refuses a line, the refusal is printed and the GPU has no image.
 #[test]
 fn the_course_images_of_assignment_7() {
     let Some(corpus) = common::corpus() else { return };
     let lines = common::course_commands(&corpus, "a7");
     let mut failures = Vec::new();
+    let horizon = {
+        let dir = tempfile::tempdir().unwrap();
+        common::copy_course_folder(&corpus, "a7", dir.path());
+        let line = lines.iter().find(|l| l.contains(&"output7_03a.tga".to_string())).expect("the course's line");
+        turned_by_rounding(dir.path(), line)
+    };
+    let flagged = horizon.iter().filter(|&&f| f).count();
+    println!("  output7_03a: {flagged} of {} pixels turn with the camera's last bits", horizon.len());
+    // The flags must stay the exception: were the reference itself unstable, they would
+    // hide everything.
+    assert!(flagged * 20 <= horizon.len(), "output7_03a: {flagged} of {} pixels flagged", horizon.len());
     for backend in backends() {
         let dir = tempfile::tempdir().unwrap();
         common::copy_course_folder(&corpus, "a7", dir.path());
@@ -243,32 +251,94 @@ fn the_course_images_of_assignment_7() {
             assert!(out.status.success(), "{}: {}", line.join(" "), stderr(&out));
             let ours = raycaster::image_io::read_image(&dir.path().join(&file)).unwrap();
             let theirs = raycaster::image_io::read_image(&corpus.join(format!("a7/expected/{stem}.png"))).unwrap();
-            let (mut off, mut horizon, mut max) = (0, 0, 0u8);
-            for (x, y, p) in ours.enumerate_pixels() {
-                let q = theirs.get_pixel(x, y);
+            let exempt = |k: usize| stem == "output7_03a" && horizon[k];
+            let (mut off, mut off_flagged, mut max, mut held) = (0, 0, 0u8, 0);
+            for (k, (p, q)) in ours.pixels().zip(theirs.pixels()).enumerate() {
                 let d = (0..3).map(|c| p[c].abs_diff(q[c])).max().unwrap();
-                max = max.max(d);
-                if d > 1 {
-                    if stem == "output7_03a" && (62..=72).contains(&y) {
-                        horizon += 1;
-                    } else {
-                        off += 1;
-                    }
+                if exempt(k) {
+                    off_flagged += usize::from(d > 1);
+                    continue;
                 }
+                held += 1;
+                max = max.max(d);
+                off += usize::from(d > 1);
             }
-            let pixels = (ours.width() * ours.height()) as usize;
-            let band = if stem == "output7_03a" {
-                format!(" (and {horizon} in rows 62-72, the horizon)")
+            let flagged_note = if stem == "output7_03a" {
+                format!(" (and {off_flagged} of the {flagged} flagged)")
             } else {
                 String::new()
             };
-            println!("  {stem:<20} {backend}: {off} of {pixels} pixels more than 1 level off{band}, max {max}");
-            if conform && !within(off, pixels) {
-                failures.push(format!("{stem} ({backend}): {off} of {pixels} off, max {max}"));
+            println!("  {stem:<20} {backend}: {off} of {held} pixels more than 1 level off{flagged_note}, max {max}");
+            if conform && !within(off, held) {
+                failures.push(format!("{stem} ({backend}): {off} of {held} off, max {max}"));
             }
         }
     }
     assert!(failures.is_empty(), "{failures:#?}");
+}
+
+/// f32's unit roundoff, 2⁻²⁴.
+const F32_UNIT_ROUNDOFF: f64 = 1.0 / (1u64 << 24) as f64;
+
+/// Roundings on the way to a float camera's ray: normalise the direction, cross it with up
+/// and normalise (the frame), scale and sum the three vectors, normalise. A chain of n
+/// roundings is off by up to γₙ = nu/(1 − nu) (Higham, "Accuracy and Stability of Numerical
+/// Algorithms", §3.1); the course's ray angles are off by that much, not more.
+const FLOAT_CAMERA_ROUNDINGS: f64 = 8.0;
+
+/// The pixels of the reference's image for `line` (run in `dir`, a copy of `a7/`) whose
+/// colour moves by more than one level when the camera turns up or down by up to
+/// γ₈ ≈ 4.8·10⁻⁷ radians (at 1, 2, 4 and 8 units of roundoff): the pixels a renderer in f32
+/// cannot be expected to share with any other, because the ray's last bits decide them.
+/// Row-major, like the image's pixels.
+fn turned_by_rounding(dir: &Path, line: &[String]) -> Vec<bool> {
+    let input = &line[line.iter().position(|a| a == "-input").unwrap() + 1];
+    let text = std::fs::read_to_string(dir.join(input)).unwrap();
+    let render = |scene: &str, file: &str| {
+        let mut args: Vec<String> = line.to_vec();
+        args[line.iter().position(|a| a == "-input").unwrap() + 1] = scene.to_string();
+        args[line.iter().position(|a| a == "-output").unwrap() + 1] = file.to_string();
+        let mut args: Vec<&str> = args.iter().map(String::as_str).collect();
+        args.extend(["--backend", "cpu", "-q"]);
+        let out = raycaster_in(dir, &args);
+        assert!(out.status.success(), "{}", stderr(&out));
+        raycaster::image_io::read_image(&dir.join(file)).unwrap()
+    };
+    let straight = render(input, "straight.tga");
+    let mut flags = vec![false; straight.pixels().len()];
+    for units in [1.0, 2.0, 4.0, 8.0f64].into_iter().filter(|&n| n <= FLOAT_CAMERA_ROUNDINGS) {
+        for sign in [-1.0, 1.0] {
+            let scene = format!("turned_{}.txt", sign * units);
+            std::fs::write(dir.join(&scene), turn_camera_up(&text, sign * units * F32_UNIT_ROUNDOFF)).unwrap();
+            let turned = render(&scene, &format!("turned_{}.tga", sign * units));
+            for (k, (p, q)) in straight.pixels().zip(turned.pixels()).enumerate() {
+                flags[k] |= (0..3).any(|c| p[c].abs_diff(q[c]) > 1);
+            }
+        }
+    }
+    flags
+}
+
+/// `scene` (a file's text) with its camera's `direction` (the first one in the file, the
+/// camera's block coming first) turned by `angle` radians about the camera's horizontal
+/// axis, written to 17 decimals so that the turn survives the parser.
+fn turn_camera_up(scene: &str, angle: f64) -> String {
+    use glam::DVec3;
+    // Each whitespace-separated word with its byte offsets.
+    let words: Vec<(usize, &str)> =
+        scene.split_whitespace().map(|w| (w.as_ptr() as usize - scene.as_ptr() as usize, w)).collect();
+    let vector = |key: &str| -> (usize, usize, DVec3) {
+        let at = words.iter().position(|&(_, w)| w == key).unwrap_or_else(|| panic!("no `{key}` in the scene"));
+        let v: Vec<f64> = words[at + 1..at + 4].iter().map(|(_, w)| w.parse().unwrap()).collect();
+        let (end, last) = words[at + 3];
+        (words[at].0, end + last.len(), DVec3::new(v[0], v[1], v[2]))
+    };
+    let (start, end, direction) = vector("direction");
+    let (_, _, up) = vector("up");
+    let axis = direction.cross(up).normalize();
+    // Rodrigues' rotation about an axis orthogonal to `direction`.
+    let turned = direction * angle.cos() + axis.cross(direction) * angle.sin();
+    format!("{}direction {:.17} {:.17} {:.17}{}", &scene[..start], turned.x, turned.y, turned.z, &scene[end..])
 }
 
 /// Every line of the course's `a7/commands.txt`, as written, inside a copy of the folder, on
