@@ -95,31 +95,40 @@ fn main_samples(@builtin(global_invocation_id) id: vec3<u32>) {
     flush_sample_counts(id, r, cut);
 }
 
-// With bins: PACKET samples of one pixel per invocation (z: samples PACKET·z …), which walk
-// the pixel's bin together. A bin lists what any ray through its pixels can meet, anywhere
-// in them (gpu::binning::PAD_PIXELS). A packet past the last sample repeats it, traced but
-// not written.
+// With bins: a packet of PACKET samples per invocation, which walk one bin together. A bin
+// lists what any ray through its pixels can meet, anywhere in them
+// (gpu::binning::PAD_PIXELS). With PACKET samples or more a pixel, a packet holds samples
+// PACKET·z … of one pixel (one past the last repeats it, traced but not written); with
+// fewer (1 or 2), every sample of PACKET / count rows of one column, as `main_bins` stacks
+// rows, the rows starting at a multiple of that count so that a packet never straddles two
+// bins (BIN_SIDE rows, a multiple of PACKET).
 @compute @workgroup_size(WORKGROUP, WORKGROUP)
 fn main_samples_bins(@builtin(global_invocation_id) id: vec3<u32>) {
     P = params;
     let i = id.x;
-    let r = id.y;
+    let per_row = min(sampling.count, PACKET);
+    let rows = packet_rows();
+    let base = sampling.first_row - sampling.first_row % rows + id.y * rows;
     let first = id.z * PACKET;
-    if (i >= P.width || r >= sampling.rows || first >= sampling.count) {
+    if (i >= P.width || base >= sampling.first_row + sampling.rows || first >= sampling.count) {
         return;
     }
-    let image_row = sampling.first_row + r;
-    let j = P.height - 1u - image_row;
     let tmin = t_min();
+    var rows_of: array<u32, PACKET>;
+    var samples_of: array<u32, PACKET>;
     for (var q = 0u; q < PACKET; q++) {
-        let k = min(first + q, sampling.count - 1u);
+        let row = min(q / per_row, rows - 1u);
+        rows_of[q] = base + row;
+        samples_of[q] = first + q - row * per_row;
+        let j = P.height - 1u - rows_of[q];
+        let k = min(samples_of[q], sampling.count - 1u);
         packet_rays[q] = primary_ray_at(i, j, sample_position(i, j, k));
-        if (first + q < sampling.count) {
+        if (sample_is_written(rows_of[q], samples_of[q]) && row_is_in_tile(rows_of[q])) {
             count(COUNT_RAYS);
         }
         packet_hits[q] = closest_plane(packet_rays[q], tmin);
     }
-    walk_bin_packet((image_row / BIN_SIDE) * P.bin_columns + i / BIN_SIDE, tmin);
+    walk_bin_packet((base / BIN_SIDE) * P.bin_columns + i / BIN_SIDE, tmin);
     var shaded: array<Shaded, PACKET>;
     for (var q = 0u; q < PACKET; q++) {
         shaded[q] = shade_pixel(packet_rays[q], packet_hits[q]);
@@ -127,11 +136,30 @@ fn main_samples_bins(@builtin(global_invocation_id) id: vec3<u32>) {
     // One canary after all of the invocation's loops, as in main_bins.
     let cut = LOOP_CANARY && loops_were_cut();
     for (var q = 0u; q < PACKET; q++) {
-        if (first + q < sampling.count) {
-            write_sample(i, r, first + q, shaded[q], cut);
+        if (sample_is_written(rows_of[q], samples_of[q])) {
+            write_sample(i, rows_of[q] - sampling.first_row, samples_of[q], shaded[q], cut);
         }
     }
-    flush_sample_counts(id, r, cut);
+    // The packet's rows that are the tile's (not the filter's overlap) count its tests.
+    if (!cut && base < P.first_row + P.tile_rows && base + rows > P.first_row) {
+        flush_counts(stats_slot(id));
+    }
+}
+
+// Rows of one column a packet of `main_samples_bins` holds: PACKET / count for 1 or 2
+// samples a pixel, 1 otherwise (3 samples: three and a repeat).
+fn packet_rows() -> u32 {
+    return max(1u, PACKET / sampling.count);
+}
+
+// Whether image row `row`'s sample k is one of the samples the tile holds.
+fn sample_is_written(row: u32, k: u32) -> bool {
+    return row >= sampling.first_row && row < sampling.first_row + sampling.rows && k < sampling.count;
+}
+
+// Whether image row `row` is one of the tile's own rows, not of the filter's overlap.
+fn row_is_in_tile(row: u32) -> bool {
+    return row >= P.first_row && row < P.first_row + P.tile_rows;
 }
 
 fn write_sample(i: u32, r: u32, k: u32, shaded: Shaded, cut: bool) {
@@ -149,8 +177,7 @@ fn write_sample(i: u32, r: u32, k: u32, shaded: Shaded, cut: bool) {
 // -stats: a row of the filter's overlap is traced again as a row of its own tile, and
 // counted there; a sample cut short, by the reference that renders its pixels again.
 fn flush_sample_counts(id: vec3<u32>, r: u32, cut: bool) {
-    let image_row = sampling.first_row + r;
-    if (!cut && image_row >= P.first_row && image_row < P.first_row + P.tile_rows) {
+    if (!cut && row_is_in_tile(sampling.first_row + r)) {
         flush_counts(stats_slot(id));
     }
 }

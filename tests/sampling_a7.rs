@@ -660,14 +660,27 @@ fn samples_anywhere_in_a_pixel_find_their_candidates_in_its_bin() {
     ];
     let Some(bins) = common::gpu_with(raycaster::gpu::Acceleration::Bins) else { return };
     let hierarchy = common::gpu_with(raycaster::gpu::Acceleration::Hierarchy).unwrap();
+    // Tiles of 5 rows, whose first rows and filter overlaps fall anywhere in a stack of rows.
+    let tiled = common::gpu().unwrap().on_same_device(raycaster::gpu::GpuOptions {
+        acceleration: raycaster::gpu::Acceleration::Bins,
+        max_tile_bytes: 5 * size as u64 * 16,
+        ..raycaster::gpu::GpuOptions::default()
+    });
     let dir = tempfile::tempdir().unwrap();
     for camera in cameras {
         let path = dir.path().join("small.txt");
         std::fs::write(&path, format!("{camera}\n{body}")).unwrap();
         let scene = raycaster::scene::load_scene(&path).unwrap();
         // 9 samples leave the last packet of 4 with one: its other rays are traced, not kept.
-        for sampler in [Sampler::Random(16), Sampler::Uniform(9)] {
-            let sampling = Sampling { sampler, filter: Filter::Box(0.5), seed: 11 };
+        // 1 and 2 samples stack 4 and 2 rows in a packet, starting at a multiple of 4 or 2;
+        // the tent of radius 1.5 reads a row around each tile.
+        for (sampler, filter) in [
+            (Sampler::Random(16), Filter::Box(0.5)),
+            (Sampler::Uniform(9), Filter::Box(0.5)),
+            (Sampler::Random(1), Filter::Tent(1.5)),
+            (Sampler::Random(2), Filter::Tent(1.5)),
+        ] {
+            let sampling = Sampling { sampler, filter, seed: 11 };
             let options = RenderOptions {
                 outputs: Output::Color.into(),
                 sampling: Some(sampling),
@@ -682,13 +695,18 @@ fn samples_anywhere_in_a_pixel_find_their_candidates_in_its_bin() {
                 let frame = gpu.render(&scene, &options).unwrap();
                 frame.color.iter().zip(&reference.color).filter(|(a, b)| (a[0] - b[0]).abs() > 0.5 / 16.0).count()
             };
-            let (from_bins, from_hierarchy) = (off(&bins), off(&hierarchy));
+            let (from_bins, from_hierarchy, from_tiles) = (off(&bins), off(&hierarchy), off(&tiled));
             println!(
-                "{camera}: {from_bins} (bins), {from_hierarchy} (hierarchy) of {} pixels differ by a sample",
+                "{camera} {sampler:?}: {from_bins} (bins), {from_tiles} (bins, tiles of 5 rows), \
+                 {from_hierarchy} (hierarchy) of {} pixels differ by a sample",
                 size * size
             );
-            assert!(within(from_bins, (size * size) as usize), "{camera}: {from_bins} pixels differ by a sample");
-            assert!(from_bins <= from_hierarchy, "{camera}: the bins miss candidates the hierarchy finds");
+            let tiles = common::render_gpu_tiles(&tiled, &scene, &options).1.tiles;
+            assert!(tiles >= size / 5, "{tiles} tiles");
+            for from in [from_bins, from_tiles] {
+                assert!(within(from, (size * size) as usize), "{camera} {sampler:?}: {from} pixels differ by a sample");
+                assert!(from <= from_hierarchy, "{camera} {sampler:?}: the bins miss candidates the hierarchy finds");
+            }
         }
     }
 }

@@ -80,8 +80,7 @@ pub struct GpuBvh {
 impl SceneBuffers {
     /// Flattens `scene` for the image `rays` describes, with a hierarchy when it has at
     /// least `bvh_min_primitives` spheres, ellipsoids and triangles. With `no_bins` (shadow,
-    /// reflected or refracted rays, which bins do not hold; or a single sample a pixel, quicker
-    /// through the hierarchy) every ray walks the hierarchy.
+    /// reflected or refracted rays, which bins do not hold) every ray walks the hierarchy.
     pub fn new(
         scene: &Scene,
         rays: &PrimaryRays,

@@ -99,11 +99,7 @@ impl<'a> PreparedScene<'a> {
             true => GridChoice::Given(super::voxels::voxel_grid(scene, size, rays.center)),
             false => GridChoice::Walk(size),
         });
-        // A single sample a pixel walks the hierarchy: from the bins it would trace a packet of
-        // BIN_PACKET samples, all but one repeats (bunny_40k at 512² on lavapipe, kernel ms,
-        // median of 3: 319 from the hierarchy, 371 from the bins; 2 samples: 569 and 367).
-        let one_sample = options.sampling.is_some_and(|s| s.count() == 1);
-        let mut buffers = SceneBuffers::new(scene, &rays, &gpu.options, secondary_rays || one_sample, grid);
+        let mut buffers = SceneBuffers::new(scene, &rays, &gpu.options, secondary_rays, grid);
         if let Some(sampling) = options.sampling {
             let samples = super::texture_range::checker_samples_per_pixel(&sampling) as f32;
             for texture in buffers.textures.iter_mut().filter(|t| t.kind == GpuTexture::CHECKERBOARD) {
@@ -420,9 +416,13 @@ impl<'a> PreparedScene<'a> {
                     };
                     gpu.queue.write_buffer(&s.sampling, 0, bytemuck::bytes_of(&header));
                     pass.set_pipeline(&sampled.samples);
-                    // With bins, an invocation traces a packet of a pixel's samples.
+                    // With bins, an invocation traces a packet: a pixel's samples, or for fewer
+                    // samples than a packet, those of a stack of rows starting at a multiple of
+                    // their count (the kernel's `packet_rows`).
                     let packets = sampling.count().div_ceil(self.packet);
-                    pass.dispatch_workgroups(columns, sample_rows.div_ceil(WORKGROUP), packets);
+                    let stack = (self.packet / sampling.count()).max(1);
+                    let stacks = (sample_first % stack + sample_rows).div_ceil(stack);
+                    pass.dispatch_workgroups(columns, stacks.div_ceil(WORKGROUP), packets);
                     pass.set_pipeline(&sampled.filter);
                     pass.dispatch_workgroups(columns, rows.div_ceil(WORKGROUP), 1);
                 }
