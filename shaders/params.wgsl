@@ -149,9 +149,11 @@ struct Triangle {
     v0: vec3<f32>,
     material: u32,
     v1: vec3<f32>,
-    _pad0: u32,
+    // The unit normal, from the host's f64 vertices, in octahedral coordinates
+    // (gpu::layout::octahedral; triangle_normal).
+    normal_u: f32,
     v2: vec3<f32>,
-    _pad1: u32,
+    normal_v: f32,
 }
 
 // A triangle for primary rays (gpu::binning::EyeTriangle): three edge planes n · q − w, with

@@ -107,6 +107,19 @@ fn triangle_t_watertight(tri: Triangle, ray: Ray, shear: Shear, tmin: f32) -> f3
     return t_if_above((u * a.z + v * b.z + w * c.z) * shear.s.z / det, tmin);
 }
 
+// The host computed the normal from the f64 vertices: a cross product of the f32 ones would
+// lose 2⁻²⁴ of their distance from the camera over an edge's length.
 fn triangle_normal(tri: Triangle) -> vec3<f32> {
-    return normalize(cross(tri.v1 - tri.v0, tri.v2 - tri.v0));
+    return octahedral_decode(vec2<f32>(tri.normal_u, tri.normal_v));
+}
+
+// Inverse of gpu::layout::octahedral (Cigolle et al. 2014, §3.1): the upper half as is, the
+// lower half unfolded, then normalised.
+fn octahedral_decode(e: vec2<f32>) -> vec3<f32> {
+    let z = 1.0 - abs(e.x) - abs(e.y);
+    var xy = e;
+    if (z < 0.0) {
+        xy = (1.0 - abs(e.yx)) * select(vec2<f32>(-1.0), vec2<f32>(1.0), e >= vec2<f32>(0.0));
+    }
+    return normalize(vec3<f32>(xy, z));
 }

@@ -118,7 +118,9 @@ fn host_structs_match_the_shader() {
             ("v0", offset_of!(GpuTriangle, v0)),
             ("material", offset_of!(GpuTriangle, material)),
             ("v1", offset_of!(GpuTriangle, v1)),
+            ("normal_u", offset_of!(GpuTriangle, normal_u)),
             ("v2", offset_of!(GpuTriangle, v2)),
+            ("normal_v", offset_of!(GpuTriangle, normal_v)),
         ],
     );
     check(

@@ -264,11 +264,14 @@ impl SceneBuffers {
     /// A mirroring transform (det < 0) reverses the winding of mapped vertices, while the
     /// normal of docs/SPEC.md §4, `normalise(M⁻ᵀ·n)`, does not flip; swapping two vertices keeps them equal.
     fn push_triangle(&mut self, matrix: &DMat4, vertices: &[DVec3; 3], material: u32) {
-        let [a, mut b, mut c] = vertices.map(|v| f32x3(matrix.transform_point3(v)));
+        let [a, mut b, mut c] = vertices.map(|v| matrix.transform_point3(v));
         if DMat3::from_mat4(*matrix).determinant() < 0.0 {
             std::mem::swap(&mut b, &mut c);
         }
-        self.triangles.push(GpuTriangle { v0: a, material, v1: b, v2: c, ..Default::default() });
+        // A triangle f64 cannot give a normal is never hit (cpu::intersect_triangle).
+        let normal = (b - a).cross(c - a).try_normalize().unwrap_or(DVec3::Z);
+        let [normal_u, normal_v] = super::layout::octahedral(normal);
+        self.triangles.push(GpuTriangle { v0: f32x3(a), material, v1: f32x3(b), normal_u, v2: f32x3(c), normal_v });
     }
 }
 

@@ -100,16 +100,34 @@ pub struct GpuPlane {
     pub _pad: [u32; 3],
 }
 
-/// WGSL `Triangle`: world-space vertices, wound so that `(v1 − v0) × (v2 − v0)` is the normal.
+/// WGSL `Triangle`: world-space vertices, wound so that `(v1 − v0) × (v2 − v0)` is the normal,
+/// and that normal, computed from the f64 vertices and stored as [`octahedral`] coordinates:
+/// from the f32 vertices the kernel would lose about 2⁻²⁴ of their distance from the camera
+/// over an edge's length, whole levels of the normal's image for a small triangle far away.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuTriangle {
     pub v0: [f32; 3],
     pub material: u32,
     pub v1: [f32; 3],
-    pub _pad0: u32,
+    pub normal_u: f32,
     pub v2: [f32; 3],
-    pub _pad1: u32,
+    pub normal_v: f32,
+}
+
+/// The octahedral coordinates of the unit vector `n`: n over its 1-norm, the lower half
+/// folded over the upper (Cigolle et al., "A Survey of Efficient Representations for
+/// Independent Unit Vectors", JCGT 3(2), 2014, §3.1). In f32 they keep the direction to
+/// about 2⁻²⁴; the kernel's `octahedral_decode` inverts them.
+pub fn octahedral(n: glam::DVec3) -> [f32; 2] {
+    let sign_not_zero = |v: f64| if v >= 0.0 { 1.0 } else { -1.0 };
+    let p = n / (n.x.abs() + n.y.abs() + n.z.abs());
+    let (u, v) = if p.z >= 0.0 {
+        (p.x, p.y)
+    } else {
+        ((1.0 - p.y.abs()) * sign_not_zero(p.x), (1.0 - p.x.abs()) * sign_not_zero(p.y))
+    };
+    [u as f32, v as f32]
 }
 
 /// WGSL `EyeTriangle`: a triangle's three edge planes through the rays' common origin or

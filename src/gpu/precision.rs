@@ -72,8 +72,20 @@
 //! normal a pixel shows); a sphere has 0 up to 2²³ and 65 at 2²⁴. So a scene with triangles
 //! may reach R = 2¹⁷ ([`MAX_RESOLUTION_TRIANGLES`]), one of spheres and planes 2²¹
 //! ([`MAX_RESOLUTION_SMOOTH`]), each 8 times below the first failure. Planes have no edge to
-//! misplace and do not count towards M. A primitive smaller than its own error (a sphere of
-//! radius 10⁻⁶ at 100 units) is distorted, but within the same fraction of a pixel.
+//! misplace and do not count towards M.
+//!
+//! # Normals
+//!
+//! A hit point is off by about 2⁻²⁴·M wherever the pixels are, and a normal computed from it
+//! (or from f32 vertices) is off by that over the primitive's size: whole levels of the
+//! normal's image for a small primitive far away, at any R. Measured at 100², 150 spheres
+//! of radius r at distance M ≈ 1000 in perspective, pixels more than 1 level off the
+//! reference: 0 up to M/r = 2¹⁵ in both the normal and the lit colour images, 33 and 18 at
+//! 2¹⁶, 128 and 64 at 2¹⁷. So a sphere may be at most 2¹³ of its radii from the camera
+//! ([`MAX_DISTANCE_OVER_RADIUS`], 8 times below the first failure; [`Limit::SphereSize`]).
+//! Triangles carry their normal from the host's f64 vertices instead
+//! ([`super::layout::GpuTriangle`]): bunny_40k seen at R = 2¹⁷ had 526 of 40 000 normal
+//! pixels off when the kernel crossed its f32 edges, and has none since.
 
 use crate::camera::PrimaryRays;
 use crate::render::RenderOptions;
@@ -94,11 +106,23 @@ pub const MAX_RESOLUTION_TRIANGLES: f64 = 131_072.0;
 /// The same for a scene of spheres and planes only: 2¹⁹.
 pub const MAX_RESOLUTION_SMOOTH: f64 = 524_288.0;
 
+/// The largest ratio of a sphere's distance from the camera (its farthest point's largest
+/// camera-relative coordinate) to its radius at which the kernel's normals stay within a
+/// level: 2¹³ (see the module's contract). Ellipsoids (spheres under a non-similarity)
+/// compute theirs in the unit sphere's space and are not bounded by it: a sphere squashed
+/// 10⁴ times, 10⁵ of its shortest half-axes away, keeps its normals
+/// (scenes/hard/squashed_sphere.txt).
+pub const MAX_DISTANCE_OVER_RADIUS: f64 = 8192.0;
+
 /// Whether the f32 kernel renders `scene` at `options` faithfully (see the module's
 /// contract); the first offending value in file order otherwise.
 pub fn check(scene: &Scene, options: &RenderOptions) -> Result<(), PrecisionError> {
-    let checker =
-        Checker { scene: &scene.path, farthest: std::cell::Cell::new(0.0), triangles: std::cell::Cell::new(false) };
+    let checker = Checker {
+        scene: &scene.path,
+        farthest: std::cell::Cell::new(0.0),
+        triangles: std::cell::Cell::new(false),
+        smallest_sphere: std::cell::Cell::new(None),
+    };
     let rays = PrimaryRays::for_camera(&scene.camera, options.width, options.height);
     // Orthographic: `horizontal` is the basis vector times `size`; perspective: the
     // direction is scaled by D = 1/tan(angle/2) and the extent is fixed (2).
@@ -149,6 +173,18 @@ pub fn check(scene: &Scene, options: &RenderOptions) -> Result<(), PrecisionErro
     };
     let triangles = checker.triangles.get();
     if resolution <= if triangles { MAX_RESOLUTION_TRIANGLES } else { MAX_RESOLUTION_SMOOTH } {
+        // The camera's resolution first: it is written before any sphere.
+        if let Some((ratio, location, what)) = checker.smallest_sphere.get().filter(|s| s.0 > MAX_DISTANCE_OVER_RADIUS)
+        {
+            return Err(PrecisionError {
+                file: scene.path.clone(),
+                location: Some(location),
+                what: what.to_string(),
+                magnitude: ratio,
+                range: String::new(),
+                limit: Limit::SphereSize,
+            });
+        }
         return super::texture_range::check(scene, options);
     }
     let what = if rays.orthographic { "OrthographicCamera size" } else { "PerspectiveCamera angle" };
@@ -170,6 +206,9 @@ struct Checker<'a> {
     /// Whether any triangle was seen: the edges a mesh's triangles share decide which
     /// normal a pixel shows, so they need a finer resolution than silhouettes.
     triangles: std::cell::Cell<bool>,
+    /// The sphere farthest from the camera for its size: distance over radius, where its
+    /// radius (or the Transform that scaled it) was written, and what that place holds.
+    smallest_sphere: std::cell::Cell<Option<(f64, Location, &'static str)>>,
 }
 
 fn in_range(magnitude: f64) -> bool {
@@ -194,6 +233,14 @@ impl Checker<'_> {
             magnitude,
             range: RANGE.to_string(),
             limit: Limit::Range,
+        }
+    }
+
+    /// Notes a sphere's distance from the camera over its radius, for its normals.
+    fn sphere_size(&self, distance: f64, radius: f64, location: Location, what: &'static str) {
+        let ratio = distance / radius;
+        if self.smallest_sphere.get().is_none_or(|(largest, ..)| ratio > largest) {
+            self.smallest_sphere.set(Some((ratio, location, what)));
         }
     }
 
@@ -277,7 +324,9 @@ impl Checker<'_> {
             self.reaches(max_norm(centre) + radius * scale);
             self.vector(center_at, "Sphere center", centre)?;
             let at = if scale == 1.0 { radius_at } else { scaled_at };
-            return self.scalar(Some(at), "Sphere radius", radius * scale);
+            self.scalar(Some(at), "Sphere radius", radius * scale)?;
+            self.sphere_size(max_norm(centre) + radius * scale, radius * scale, at, "Sphere radius");
+            return Ok(());
         }
         let to_world = *matrix * DMat4::from_translation(center) * DMat4::from_scale(DVec3::splat(radius));
         let to_unit = to_world.inverse();

@@ -17,7 +17,8 @@ pub struct PrecisionError {
     /// What the value is, e.g. `Sphere radius`.
     pub what: String,
     /// Its magnitude, camera-relative and after transforms (NaN or infinite if f64 itself
-    /// overflowed computing it); for [`Limit::Resolution`], the ratio R.
+    /// overflowed computing it); for [`Limit::Resolution`], the ratio R; for
+    /// [`Limit::SphereSize`], the sphere's distance from the camera over its radius.
     pub magnitude: f64,
     /// The range it left, in words ([`RANGE`], or a texture's, [`super::texture_range`]).
     pub range: String,
@@ -34,6 +35,9 @@ pub enum Limit {
     /// [`super::precision::MAX_RESOLUTION_TRIANGLES`] or
     /// [`super::precision::MAX_RESOLUTION_SMOOTH`].
     Resolution { triangles: bool },
+    /// A sphere too small for its distance from the camera to get its normal right: the
+    /// distance over the radius above [`super::precision::MAX_DISTANCE_OVER_RADIUS`].
+    SphereSize,
 }
 
 /// The range of every magnitude but textures', in words.
@@ -57,6 +61,13 @@ impl fmt::Display for PrecisionError {
                 self.what,
                 show(self.magnitude),
                 if triangles { "1/2^17 with triangles" } else { "1/2^19" }
+            ),
+            Limit::SphereSize => write!(
+                f,
+                ": {}: the sphere is {} radii from the camera; past 2^13 radii the GPU's f32 \
+                 kernel cannot place its normals within a level",
+                self.what,
+                show(self.magnitude)
             ),
         }
     }
