@@ -39,6 +39,12 @@ fn try_binned_triangle(k: u32, ray: Ray, shear: Shear, tmin: f32, best: Closest)
     return try_triangle(k, ray, shear, tmin, best);
 }
 
+// The bin of pixel column i in image row `row` (from the top), in the band of bin rows
+// bound for this dispatch (gpu::binning::Bins::band).
+fn bin_of(i: u32, row: u32) -> u32 {
+    return (row / BIN_SIDE - P.first_bin_row) * P.bin_columns + i / BIN_SIDE;
+}
+
 // The packet's rays and closest hits so far. Every loop over them has the constant trip
 // count PACKET, which the compiler unrolls, so they live in registers; a loop left rolled
 // would also count against lavapipe's 65535 iterations per invocation (docs/lavapipe.md).

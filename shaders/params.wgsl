@@ -109,7 +109,8 @@ struct Params {
     grid_min: vec3<f32>,
     grid_nz: u32,
     grid_cell: vec3<f32>,
-    _pad0: u32,
+    // The bin row where the band of bins bound for this dispatch starts (USE_BINS).
+    first_bin_row: u32,
 }
 
 // A sphere in world space (a similarity transform was baked into it).
@@ -243,7 +244,8 @@ var<private> P: Params;
 // References (kind << REF_KIND_SHIFT | index into that kind's array), in leaf order.
 @group(0) @binding(9) var<storage, read> prim_refs: array<u32>;
 @group(0) @binding(10) var<storage, read> eye_triangles: array<EyeTriangle>;
-// Per bin (BIN_SIDE × BIN_SIDE pixels, row by row from the top): first item and count.
+// Per bin (BIN_SIDE × BIN_SIDE pixels, row by row from P.first_bin_row, the band of bin
+// rows the dispatch traces): first item and count.
 @group(0) @binding(11) var<storage, read> bin_ranges: array<vec2<u32>>;
 @group(0) @binding(12) var<storage, read> bin_items: array<BinItem>;
 // One per material where TEXTURES (a single zero entry otherwise).

@@ -77,6 +77,7 @@ fn host_structs_match_the_shader() {
             ("grid_min", offset_of!(Params, grid_min)),
             ("grid_nz", offset_of!(Params, grid_nz)),
             ("grid_cell", offset_of!(Params, grid_cell)),
+            ("first_bin_row", offset_of!(Params, first_bin_row)),
         ],
     );
     check(

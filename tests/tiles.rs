@@ -125,3 +125,69 @@ fn row_tiles_cover_the_image() {
     assert_eq!(row_tiles(3, 0).collect::<Vec<_>>(), vec![(0, 1), (1, 1), (2, 1)]);
     assert_eq!(row_tiles(0, 5).count(), 0);
 }
+
+/// A scene whose bins' lists change from one bin row to the next: a 9 × 9 lattice of small
+/// spheres, each seen in a bin row or two of a 61 × 53 image.
+fn lattice() -> raycaster::scene::Scene {
+    let mut spheres = Vec::new();
+    for y in -4..=4 {
+        for x in -4..=4 {
+            spheres.push(format!("Sphere {{ center {} {} 0 radius 0.17 }}", x as f64 * 0.5, y as f64 * 0.55));
+        }
+    }
+    let text = format!(
+        "OrthographicCamera {{ center 0 0 10 direction 0 0 -1 up 0 1 0 size 5.2 }}
+         Lights {{ numLights 1 DirectionalLight {{ direction -0.3 -0.4 -1 color 1 1 1 }} }}
+         Background {{ color 0.1 0.2 0.3 ambientLight 0.2 0.2 0.2 }}
+         Materials {{ numMaterials 1 Material {{ diffuseColor 0.9 0.5 0.2 }} }}
+         Group {{ numObjects {} MaterialIndex 0 {} }}",
+        spheres.len(),
+        spheres.join("\n")
+    );
+    raycaster::scene::parse_scene(&text, "lattice.txt".as_ref()).unwrap()
+}
+
+/// Each tile binds only the bins of its own band of rows, indexed from the band's first bin
+/// row (docs/SPEC.md §6): tiles of 3 rows (so bands start inside a bin, and a packet of 4
+/// rows inside a tile) and a band of a split render starting at row 13 give what one tile,
+/// holding every bin, gives: a band read one bin row off would show another row's spheres.
+#[test]
+fn gpu_binned_tiles_equal_one_pass() {
+    use raycaster::gpu::{Acceleration, GpuRenderer};
+    let Some(gpu) = common::gpu() else { return };
+    let (width, height) = (61, 53);
+    let bins =
+        |max_tile_bytes| GpuOptions { acceleration: Acceleration::Bins, max_tile_bytes, ..GpuOptions::default() };
+    let whole_gpu = gpu.on_same_device(bins(u64::MAX));
+    let small = gpu.on_same_device(bins(width as u64 * 3 * 32));
+    let sampled = RenderOptions {
+        sampling: Some(raycaster::sampling::Sampling {
+            sampler: raycaster::sampling::Sampler::Jittered(4),
+            filter: raycaster::sampling::Filter::Tent(1.5),
+            seed: 3,
+        }),
+        ..RenderOptions::all(width, height)
+    };
+    for options in [RenderOptions::all(width, height), sampled] {
+        let render = |g: &GpuRenderer| common::render_gpu_tiles(g, &lattice(), &options);
+        let (whole, whole_stats) = render(&whole_gpu);
+        let (tiled, stats) = render(&small);
+        assert_eq!((whole_stats.acceleration, stats.acceleration), (Acceleration::Bins, Acceleration::Bins));
+        assert_eq!((whole_stats.tiles, stats.tiles), (1, 18));
+        let hits = whole.hit.iter().filter(|&&h| h).count();
+        assert!(hits > 500 && hits < 2500, "{hits} pixels hit: the spheres are not where the test wants them");
+        assert!(tiled == whole, "tiles of 3 rows differ from one tile (sampling {:?})", options.sampling);
+        let prepared = small.prepare(&lattice(), &options, false).unwrap();
+        let mut band = whole.clone();
+        band.hit.fill(false);
+        prepared
+            .render_band(13, 29, |tile| {
+                band.paste(tile.first_row, &tile.to_frame());
+                Ok::<(), raycaster::gpu::GpuError>(())
+            })
+            .unwrap();
+        let rows = (13 * width) as usize..(42 * width) as usize;
+        assert_eq!(band.hit[rows.clone()], whole.hit[rows.clone()]);
+        assert_eq!(band.color[rows.clone()], whole.color[rows], "rows 13 … 41 alone differ from one tile");
+    }
+}

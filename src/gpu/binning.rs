@@ -28,17 +28,40 @@ pub const BIN_SIDE: u32 = super::WORKGROUP;
 /// pixels, ⌊x₀ − pad⌋, already takes in every one of them.)
 const PAD_PIXELS: f64 = 1.0;
 
-/// The bins of one frame.
+/// The bins of one frame, built band by band: the frame keeps, per primitive, its place
+/// (which bins it is listed in, and where in their lists), and [`Bins::band`] fills the
+/// lists of a band of bin rows when a tile needs them, so that memory for the lists is
+/// bounded by the tile, not the frame (docs/SPEC.md §6: bunny_40k at 16384² with `-output`
+/// peaked at 328 MB resident with the whole frame's lists, at 114 MB with a band's).
 #[derive(Clone, Debug, Default)]
 pub struct Bins {
     /// Bin columns (tiles per image row).
     pub columns: u32,
-    /// Per bin, `[first, count]` into `items`; bins are numbered row by row from the top.
-    pub ranges: Vec<[u32; 2]>,
-    pub items: Vec<BinItem>,
+    /// Bin rows of the frame.
+    pub rows: u32,
+    /// Every primitive some ray may meet, nearest first: the order of every bin's list.
+    placed: Vec<Placed>,
+    /// Items listed in each bin row: what a band's buffers must hold.
+    row_items: Vec<u64>,
     /// Per triangle, its edge planes and plane (same index as the triangle).
     pub eye_triangles: Vec<EyeTriangle>,
     pub build_ms: f64,
+}
+
+/// A primitive's entry in each bin of the inclusive rectangle `[col0, row0, col1, row1]`.
+#[derive(Clone, Copy, Debug)]
+struct Placed {
+    item: BinItem,
+    bins: [u32; 4],
+}
+
+/// The lists of a band of bin rows, as the kernel reads them.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Band {
+    /// Per bin, `[first, count]` into `items`; bins are numbered row by row from the band's
+    /// first row.
+    pub ranges: Vec<[u32; 2]>,
+    pub items: Vec<BinItem>,
 }
 
 /// A finite primitive to bin: its reference ([`PrimitiveKind::reference`]) and its bounds.
@@ -51,8 +74,8 @@ pub struct Candidate {
 
 impl Bins {
     /// Bins `candidates` for the image `rays` describes, or `None` when `worth_it` turns
-    /// down the lists' lengths, which are known before the lists are sorted and filled (so
-    /// a scene that goes to the hierarchy pays only for the projection and the count).
+    /// down the lists' lengths, which are known before any list is filled (so a scene that
+    /// goes to the hierarchy pays only for the projection and the count).
     pub fn build(
         rays: &PrimaryRays,
         triangles: &[GpuTriangle],
@@ -62,56 +85,122 @@ impl Bins {
         let start = crate::clock::Instant::now();
         let projector = Projector::new(rays);
         let columns = rays.width.div_ceil(BIN_SIDE);
-        let bin_rows = rays.height.div_ceil(BIN_SIDE);
-        // (near, reference, tile rect) of every primitive some ray may meet.
-        let mut placed: Vec<(f32, u32, [u32; 4])> = Vec::with_capacity(candidates.len());
+        let rows = rays.height.div_ceil(BIN_SIDE);
+        let mut placed: Vec<Placed> = Vec::with_capacity(candidates.len());
         for c in candidates {
             let corners = match c.points {
                 Some(p) => p.to_vec(),
                 None => box_corners(&c.bounds),
             };
             let Some(rect) = projector.pixel_rect(&corners) else { continue };
-            let tiles = [rect[0] / BIN_SIDE, rect[1] / BIN_SIDE, rect[2] / BIN_SIDE, rect[3] / BIN_SIDE];
-            placed.push((projector.near_bound(&c.bounds), c.reference, tiles));
+            let item = BinItem { reference: c.reference, near: projector.near_bound(&c.bounds) };
+            placed.push(Placed { item, bins: rect.map(|v| v / BIN_SIDE) });
         }
-        let mut counts = vec![0u32; (columns * bin_rows) as usize];
-        for (_, _, [c0, r0, c1, r1]) in &placed {
-            for row in *r0..=*r1 {
-                for col in *c0..=*c1 {
-                    counts[(row * columns + col) as usize] += 1;
-                }
-            }
-        }
-        let lengths = ListLengths {
-            mean: counts.iter().map(|&c| c as f64).sum::<f64>() / counts.len().max(1) as f64,
-            max: counts.iter().copied().max().unwrap_or(0),
-        };
+        let (lengths, row_items) = list_lengths(&placed, columns, rows);
         if !worth_it(&lengths) {
             return None;
         }
-        // Counting sort keeps this order within each bin: nearest first.
-        placed.sort_by(|a, b| a.0.total_cmp(&b.0));
-        let mut ranges = Vec::with_capacity(counts.len());
-        let mut total = 0u32;
-        for &count in &counts {
-            ranges.push([total, count]);
-            total += count;
-        }
-        let mut items = vec![BinItem::default(); total as usize];
-        let mut fill: Vec<u32> = ranges.iter().map(|r| r[0]).collect();
-        for &(near, reference, [c0, r0, c1, r1]) in &placed {
+        // Stable, so that equally near primitives keep their order in every band's lists.
+        placed.sort_by(|a, b| a.item.near.total_cmp(&b.item.near));
+        let eye_triangles =
+            triangles.iter().map(|t| EyeTriangle::new(t, rays.orthographic, projector.direction)).collect();
+        Some(Bins { columns, rows, placed, row_items, eye_triangles, build_ms: start.elapsed().as_secs_f64() * 1e3 })
+    }
+
+    /// The bin rows `first .. first + count` that hold image rows `first_row .. first_row +
+    /// rows` (rows from the top).
+    pub fn rows_holding(first_row: u32, rows: u32) -> (u32, u32) {
+        let first = first_row / BIN_SIDE;
+        (first, (first_row + rows.max(1) - 1) / BIN_SIDE + 1 - first)
+    }
+
+    /// The most items any `count` consecutive bin rows list: what a buffer for a band of
+    /// that many rows must hold.
+    pub fn most_items(&self, count: u32) -> u64 {
+        let count = (count as usize).clamp(1, self.row_items.len().max(1));
+        self.row_items.windows(count).map(|w| w.iter().sum()).max().unwrap_or(0)
+    }
+
+    /// The lists of bin rows `first .. first + count`, each nearest first, exactly as the
+    /// frame's own lists would hold them.
+    pub fn band(&self, first: u32, count: u32) -> Band {
+        let count = count.min(self.rows - first);
+        let last = first + count - 1;
+        // Every primitive is looked at for every band: O(primitives) a tile (bunny_40k: a
+        // fraction of a millisecond), and no memory beyond the frame's placements.
+        let in_band = || {
+            self.placed.iter().filter(move |p| p.bins[1] <= last && p.bins[3] >= first).map(move |p| {
+                let [c0, r0, c1, r1] = p.bins;
+                (p.item, [c0, r0.max(first) - first, c1, r1.min(last) - first])
+            })
+        };
+        let mut counts = vec![0u32; (count * self.columns) as usize];
+        for (_, [c0, r0, c1, r1]) in in_band() {
             for row in r0..=r1 {
                 for col in c0..=c1 {
-                    let slot = &mut fill[(row * columns + col) as usize];
-                    items[*slot as usize] = BinItem { reference, near };
+                    counts[(row * self.columns + col) as usize] += 1;
+                }
+            }
+        }
+        let mut ranges = Vec::with_capacity(counts.len());
+        let mut total = 0u32;
+        for &n in &counts {
+            ranges.push([total, n]);
+            total += n;
+        }
+        // Counting sort: each bin keeps the placement order, nearest first.
+        let mut items = vec![BinItem::default(); total as usize];
+        let mut fill = counts;
+        for (slot, range) in fill.iter_mut().zip(&ranges) {
+            *slot = range[0];
+        }
+        for (item, [c0, r0, c1, r1]) in in_band() {
+            for row in r0..=r1 {
+                for col in c0..=c1 {
+                    let slot = &mut fill[(row * self.columns + col) as usize];
+                    items[*slot as usize] = item;
                     *slot += 1;
                 }
             }
         }
-        let eye_triangles =
-            triangles.iter().map(|t| EyeTriangle::new(t, rays.orthographic, projector.direction)).collect();
-        Some(Bins { columns, ranges, items, eye_triangles, build_ms: start.elapsed().as_secs_f64() * 1e3 })
+        Band { ranges, items }
     }
+}
+
+/// The lengths of the frame's lists, and the items of each bin row, counted row by row
+/// (a row of counts at a time, never the frame's).
+fn list_lengths(placed: &[Placed], columns: u32, rows: u32) -> (ListLengths, Vec<u64>) {
+    let mut by_first_row: Vec<&Placed> = placed.iter().collect();
+    by_first_row.sort_by_key(|p| p.bins[1]);
+    let mut next = by_first_row.iter().peekable();
+    let mut active: Vec<&Placed> = Vec::new();
+    // Differences between neighbouring columns' counts.
+    let mut steps = vec![0i64; columns as usize + 1];
+    let (mut total, mut max) = (0u64, 0u32);
+    let mut row_items = Vec::with_capacity(rows as usize);
+    for row in 0..rows {
+        active.retain(|p| p.bins[3] >= row);
+        while let Some(p) = next.next_if(|p| p.bins[1] == row) {
+            active.push(p);
+        }
+        steps.fill(0);
+        let mut items = 0u64;
+        for p in &active {
+            let [c0, _, c1, _] = p.bins;
+            steps[c0 as usize] += 1;
+            steps[c1 as usize + 1] -= 1;
+            items += u64::from(c1 - c0 + 1);
+        }
+        let mut count = 0i64;
+        for step in &steps[..columns as usize] {
+            count += step;
+            max = max.max(count as u32);
+        }
+        total += items;
+        row_items.push(items);
+    }
+    let bins = (columns as u64 * rows as u64).max(1);
+    (ListLengths { mean: total as f64 / bins as f64, max }, row_items)
 }
 
 /// How long the bins' lists are: the cost model's inputs.

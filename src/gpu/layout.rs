@@ -37,7 +37,8 @@ pub struct Params {
     pub grid_nz: u32,
     /// One cell's extent along each axis.
     pub grid_cell: [f32; 3],
-    pub _pad: u32,
+    /// The first bin row of the band whose lists the tile's bindings hold (USE_BINS).
+    pub first_bin_row: u32,
 }
 
 /// WGSL `Sampling` (shaders/sampling.wgsl): the sampler, the filter, and the rows of samples

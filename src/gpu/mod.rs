@@ -327,6 +327,10 @@ const MAX_CACHED_PIPELINES: usize = 32;
 /// The `@binding` of the output (`pixels`).
 const OUTPUT_BINDING: usize = 7;
 
+/// The `@binding`s of the bins' lists (per slot where the frame has bins: each tile's band).
+const BIN_RANGES_BINDING: usize = 11;
+const BIN_ITEMS_BINDING: usize = 12;
+
 /// The `@binding` of the `-stats` counters (`counters`).
 const COUNTERS_BINDING: usize = 15;
 
@@ -372,7 +376,8 @@ pub struct RenderStats {
     pub pixels_beyond_reach: u64,
     /// Time to flatten the scene into buffers (BVH build included) and upload them.
     pub prepare_ms: f64,
-    /// Bytes of scene data uploaded (primitives, materials, lights, hierarchy, bins).
+    /// Bytes of scene data on the device (primitives, materials, lights, hierarchy, and
+    /// the bins: their edge planes and the buffers of the lists of each tile in flight).
     pub scene_bytes: u64,
     /// How the kernel found candidates (never `Auto`: what the cost model chose).
     pub acceleration: Acceleration,

@@ -8,14 +8,15 @@
 //! renders the tiles one after another and awaits each.
 
 use super::bindings::BindingSet;
+use super::binning::{Bins, BIN_SIDE};
 use super::flatten::{GridChoice, SceneBuffers};
 use super::layout::{
-    GpuSampling, GpuTexture, Handover, Params, PixelLayout, PACKED_MISS, PERLIN_PERMUTATION, SAMPLE_WORDS, STATS_SLOTS,
-    STATS_WORDS,
+    BinItem, GpuSampling, GpuTexture, Handover, Params, PixelLayout, PACKED_MISS, PERLIN_PERMUTATION, SAMPLE_WORDS,
+    STATS_SLOTS, STATS_WORDS,
 };
 use super::{
-    GpuError, GpuRenderer, KernelConfig, RenderStats, Stage, Timer, BINDINGS, COUNTERS_BINDING, MAX_SAMPLE_BYTES,
-    OUTPUT_BINDING, SAMPLES_BINDING, SAMPLING_BINDING, WORKGROUP,
+    GpuError, GpuRenderer, KernelConfig, RenderStats, Stage, Timer, BINDINGS, BIN_ITEMS_BINDING, BIN_RANGES_BINDING,
+    COUNTERS_BINDING, MAX_SAMPLE_BYTES, OUTPUT_BINDING, SAMPLES_BINDING, SAMPLING_BINDING, WORKGROUP,
 };
 use crate::cpu::Reference;
 use crate::render::{row_tiles, Frame, Output, RayStats, RenderOptions};
@@ -43,6 +44,9 @@ pub struct PreparedScene<'a> {
     counters: Counters,
     /// With sampling: the passes that trace the samples and filter them.
     sampled: Option<Sampled>,
+    /// The frame's screen-space bins, whose lists each tile fills for its own band of rows
+    /// ([`Bins::band`]) into its slot's buffers.
+    bins: Option<Bins>,
 }
 
 /// The `counters` binding: [`STATS_SLOTS`] slots of [`STATS_WORDS`] words, with a buffer to
@@ -66,8 +70,17 @@ struct Slot {
     sampling: wgpu::Buffer,
     output: wgpu::Buffer,
     readback: wgpu::Buffer,
+    /// The lists of the bins the tile's rays walk, where the frame has bins.
+    bins: Option<BandBuffers>,
     bind_group: wgpu::BindGroup,
     timer: Option<Timer>,
+}
+
+/// The `bin_ranges` and `bin_items` of a slot: room for the lists of the largest band of
+/// bin rows a tile traces.
+struct BandBuffers {
+    ranges: wgpu::Buffer,
+    items: wgpu::Buffer,
 }
 
 /// One tile as the kernel wrote it and the host read it back, floats or packed 8-bit words
@@ -156,10 +169,22 @@ impl<'a> PreparedScene<'a> {
         let tiles = options.height.div_ceil(tile_rows);
         let tile_bytes = options.width as u64 * tile_rows as u64 * layout.words() as u64 * 4;
         let counters = Counters::new(gpu, options.stats);
-        let slots = (0..tiles.min(2))
-            .map(|_| Slot::new(gpu, &bindings, &inputs, &counters.buffer, tile_bytes, sample_bytes))
+        let acceleration = buffers.acceleration();
+        let bins = buffers.bins.take();
+        let traced_rows = match options.sampling {
+            Some(sampling) => (tile_rows + 2 * sampling.radius()).min(options.height),
+            None => tile_rows,
+        };
+        let limit = gpu.limits.max_storage_buffer_binding_size;
+        let band_bytes = bins.as_ref().map(|b| band_bytes(b, traced_rows, limit)).transpose()?;
+        let slots: Vec<Slot> = (0..tiles.min(2))
+            .map(|_| {
+                let sizes = SlotSizes { tile_bytes, sample_bytes, band_bytes };
+                Slot::new(gpu, &bindings, &inputs, &counters.buffer, sizes)
+            })
             .collect();
-        let scene_bytes = inputs.iter().flatten().map(|b| b.size()).sum();
+        let band_buffer_bytes: u64 = band_bytes.map_or(0, |(r, i)| r + i) * slots.len() as u64;
+        let scene_bytes = inputs.iter().flatten().map(|b| b.size()).sum::<u64>() + band_buffer_bytes;
         Ok(PreparedScene {
             gpu,
             pipeline,
@@ -176,11 +201,11 @@ impl<'a> PreparedScene<'a> {
                     .bvh
                     .as_ref()
                     .map(|b| b.build_ms)
-                    .or(buffers.bins.as_ref().map(|b| b.build_ms))
+                    .or(bins.as_ref().map(|b| b.build_ms))
                     .or(buffers.grid.as_ref().map(|g| g.build_ms)),
                 prepare_ms: start.elapsed().as_secs_f64() * 1e3,
                 scene_bytes,
-                acceleration: buffers.acceleration(),
+                acceleration,
                 pixels_cut_short: 0,
                 pixels_beyond_reach: 0,
                 counted: None,
@@ -189,6 +214,7 @@ impl<'a> PreparedScene<'a> {
             fallback: (config.loop_canary || config.textures).then(|| scene.clone()),
             counters,
             sampled,
+            bins,
         })
     }
 
@@ -369,11 +395,37 @@ impl<'a> PreparedScene<'a> {
         }
     }
 
+    /// The image rows whose rays a tile of `rows` rows from `first_row` traces: its own, and
+    /// with sampling those the filter reads around them (docs/SPEC.md §8).
+    fn traced_rows(&self, first_row: u32, rows: u32) -> (u32, u32) {
+        let Some(sampled) = &self.sampled else { return (first_row, rows) };
+        let radius = sampled.sampling.radius();
+        let first = first_row.saturating_sub(radius);
+        (first, (first_row + rows).saturating_add(radius).min(self.options.height) - first)
+    }
+
+    /// Fills the slot's bin buffers with the lists of the bins that hold image rows
+    /// `first_row .. first_row + rows`, where the frame has bins; returns the band's first
+    /// bin row (the kernel's `first_bin_row`).
+    fn upload_band(&self, slot: &Slot, first_row: u32, rows: u32) -> u32 {
+        let (Some(bins), Some(buffers)) = (&self.bins, &slot.bins) else { return 0 };
+        let (first, count) = Bins::rows_holding(first_row, rows);
+        let band = bins.band(first, count);
+        let queue = &self.gpu.queue;
+        queue.write_buffer(&buffers.ranges, 0, bytemuck::cast_slice(&band.ranges));
+        if !band.items.is_empty() {
+            queue.write_buffer(&buffers.items, 0, bytemuck::cast_slice(&band.items));
+        }
+        first
+    }
+
     /// Dispatches one tile into `slot` and copies it to the slot's readback buffer.
     fn submit_tile(&self, slot: usize, first_row: u32, rows: u32) -> wgpu::SubmissionIndex {
         let gpu = self.gpu;
         let s = &self.slots[slot];
-        let params = Params { first_row, tile_rows: rows, ..self.params };
+        let (traced_first, traced_rows) = self.traced_rows(first_row, rows);
+        let first_bin_row = self.upload_band(s, traced_first, traced_rows);
+        let params = Params { first_row, tile_rows: rows, first_bin_row, ..self.params };
         gpu.queue.write_buffer(&s.params, 0, bytemuck::bytes_of(&params));
         let size = self.tile_bytes(rows);
         let mut encoder = gpu.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("raycast") });
@@ -399,9 +451,8 @@ impl<'a> PreparedScene<'a> {
                     // them, then each pixel from them (the two dispatches are ordered: wgpu
                     // puts a barrier between a pass's dispatches that write and read a buffer).
                     let sampling = &sampled.sampling;
+                    let (sample_first, sample_rows) = (traced_first, traced_rows);
                     let radius = sampling.radius();
-                    let sample_first = first_row.saturating_sub(radius);
-                    let sample_rows = (first_row + rows).saturating_add(radius).min(self.options.height) - sample_first;
                     let header = GpuSampling {
                         count: sampling.count(),
                         side: sampling.sampler.side(),
@@ -442,8 +493,7 @@ impl Slot {
         bindings: &BindingSet,
         inputs: &[Option<wgpu::Buffer>; BINDINGS.len()],
         counters: &wgpu::Buffer,
-        tile_bytes: u64,
-        sample_bytes: u64,
+        sizes: SlotSizes,
     ) -> Slot {
         let buffer = |label, size, usage| {
             gpu.device.create_buffer(&wgpu::BufferDescriptor {
@@ -455,9 +505,13 @@ impl Slot {
         };
         use wgpu::BufferUsages as U;
         let params = buffer("params", std::mem::size_of::<Params>() as u64, U::STORAGE | U::COPY_DST);
-        let output = buffer("pixels", tile_bytes, U::STORAGE | U::COPY_SRC);
-        let readback = buffer("readback", tile_bytes, U::MAP_READ | U::COPY_DST);
-        let samples = buffer("samples", sample_bytes, U::STORAGE);
+        let output = buffer("pixels", sizes.tile_bytes, U::STORAGE | U::COPY_SRC);
+        let readback = buffer("readback", sizes.tile_bytes, U::MAP_READ | U::COPY_DST);
+        let samples = buffer("samples", sizes.sample_bytes, U::STORAGE);
+        let bins = sizes.band_bytes.map(|(ranges, items)| BandBuffers {
+            ranges: buffer("bin_ranges", ranges, U::STORAGE | U::COPY_DST),
+            items: buffer("bin_items", items, U::STORAGE | U::COPY_DST),
+        });
         let sampling = buffer("sampling", std::mem::size_of::<GpuSampling>() as u64, U::STORAGE | U::COPY_DST);
         let entries: Vec<_> = (0..BINDINGS.len())
             .filter(|&k| bindings.contains(k))
@@ -468,6 +522,8 @@ impl Slot {
                     COUNTERS_BINDING => counters,
                     SAMPLES_BINDING => &samples,
                     SAMPLING_BINDING => &sampling,
+                    BIN_RANGES_BINDING if bins.is_some() => &bins.as_ref().expect("checked").ranges,
+                    BIN_ITEMS_BINDING if bins.is_some() => &bins.as_ref().expect("checked").items,
                     _ => inputs[k].as_ref().expect("every input binding is uploaded"),
                 };
                 wgpu::BindGroupEntry { binding: k as u32, resource: resource.as_entire_binding() }
@@ -479,8 +535,33 @@ impl Slot {
             entries: &entries,
         });
         let timer = gpu.timestamps.then(|| Timer::new(&gpu.device));
-        Slot { params, sampling, output, readback, bind_group, timer }
+        Slot { params, sampling, output, readback, bins, bind_group, timer }
     }
+}
+
+/// The sizes of a slot's buffers: the output tile, the samples, and where the frame has
+/// bins those of the bin ranges and items of a band.
+#[derive(Clone, Copy)]
+struct SlotSizes {
+    tile_bytes: u64,
+    sample_bytes: u64,
+    band_bytes: Option<(u64, u64)>,
+}
+
+/// The bytes of `bin_ranges` and `bin_items` that hold the lists of any band of bin rows a
+/// tile tracing `traced_rows` image rows walks, refused where either exceeds the adapter's
+/// storage binding limit. (A band spans at most one bin row more than the rows' height
+/// when it does not start on a bin's edge.)
+fn band_bytes(bins: &Bins, traced_rows: u32, limit: u64) -> Result<(u64, u64), GpuError> {
+    let band_rows = ((traced_rows.max(1) - 1) / BIN_SIDE + 2).min(bins.rows);
+    let ranges = band_rows as u64 * bins.columns as u64 * std::mem::size_of::<[u32; 2]>() as u64;
+    let items = bins.most_items(band_rows).max(1) * std::mem::size_of::<BinItem>() as u64;
+    if items > limit {
+        return Err(GpuError::TooLarge(format!(
+            "bin_items: {items} bytes for a tile's bins exceed the adapter's storage binding limit of {limit} bytes"
+        )));
+    }
+    Ok((ranges, items))
 }
 
 impl Counters {
@@ -556,9 +637,10 @@ fn upload_inputs(
     let bvh = buffers.bvh.as_ref();
     let bins = buffers.bins.as_ref();
     let grid = buffers.grid.as_ref();
-    // A grid has no hierarchy nor bins, and takes their bindings for its cells.
+    // A grid has no hierarchy nor bins, and takes their bindings for its cells. The bins'
+    // lists are each slot's, filled tile by tile.
     let refs = grid.map_or(bvh.map_or(&[][..], |b| &b.prim_refs), |g| &g.refs);
-    let ranges = grid.map_or(bins.map_or(&[][..], |b| &b.ranges), |g| &g.ranges);
+    let ranges = grid.map_or(&[][..], |g| &g.ranges);
     let contents: [Option<&[u8]>; BINDINGS.len()] = [
         None,
         Some(non_empty(&buffers.spheres)),
@@ -571,8 +653,8 @@ fn upload_inputs(
         Some(non_empty(bvh.map_or(&[][..], |b| &b.nodes))),
         Some(non_empty(refs)),
         Some(non_empty(bins.map_or(&[][..], |b| &b.eye_triangles))),
-        Some(non_empty(ranges)),
-        Some(non_empty(bins.map_or(&[][..], |b| &b.items))),
+        bins.is_none().then(|| non_empty(ranges)),
+        bins.is_none().then(|| non_empty::<BinItem>(&[])),
         Some(non_empty(&buffers.textures)),
         Some(non_empty(if buffers.textures.is_empty() { &[][..] } else { &PERLIN_PERMUTATION[..] })),
         None,
