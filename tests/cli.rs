@@ -889,7 +889,7 @@ fn auto_traces_small_ray_trees_with_the_reference_on_a_cpu_device() {
             specks + 3
         );
         text += "Sphere { center -1 0 0 radius 1 } Sphere { center 1.2 0 -1 radius 1 }\n";
-        text += &(0..specks).map(|k| format!("Sphere {{ center {k} 0 -60 radius 0.01 }}\n")).collect::<String>();
+        text += &(0..specks).map(|k| format!("Sphere {{ center {k} 0 -60 radius 0.03 }}\n")).collect::<String>();
         std::fs::write(&path, text + "}\n").unwrap();
         path
     };
