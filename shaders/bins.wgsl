@@ -51,13 +51,28 @@ fn bin_of(i: u32, row: u32) -> u32 {
 var<private> packet_rays: array<Ray, PACKET>;
 var<private> packet_hits: array<Closest, PACKET>;
 
+// Whether a packet of pixels in column x and rows y0 … y1 of a bin (all relative to the
+// bin's corner) lies outside an item's pixel rectangle (BinItem.pixels): then none of its
+// rays can meet the item, and the item is not even loaded.
+fn packet_misses(pixels: u32, x: u32, y0: u32, y1: u32) -> bool {
+    let c0 = pixels & 0xffu;
+    let r0 = (pixels >> 8u) & 0xffu;
+    let c1 = (pixels >> 16u) & 0xffu;
+    let r1 = pixels >> 24u;
+    return x < c0 || x > c1 || y1 < r0 || y0 > r1;
+}
+
 // The closest hits of the packet among the primitives listed in its bin, nearest first.
 // The list, and so the loop, is the same for every invocation of the workgroup. Each item
 // is loaded once and tested against the PACKET rays (on lavapipe a load costs a gather per
 // lane group even when every lane reads one address: docs/lavapipe.md); the walk stops
 // once every ray's closest hit is nearer than the next item can be.
-fn walk_bin_packet(bin: u32, tmin: f32) {
+// The packet's pixels are column `column`, image rows `first_row` … `last_row`, all in the bin.
+fn walk_bin_packet(bin: u32, column: u32, first_row: u32, last_row: u32, tmin: f32) {
     let range = bin_ranges[bin];
+    let x = column % BIN_SIDE;
+    let y0 = first_row % BIN_SIDE;
+    let y1 = last_row % BIN_SIDE;
     var shears: array<Shear, PACKET>;
     for (var r = 0u; r < PACKET; r++) {
         shears[r] = shear_for(packet_rays[r].direction);
@@ -70,6 +85,9 @@ fn walk_bin_packet(bin: u32, tmin: f32) {
         }
         if (item.near > farthest) {
             break;
+        }
+        if (packet_misses(item.pixels, x, y0, y1)) {
+            continue;
         }
         let reference = item.reference;
         if (!HAS_SPHERES && !HAS_ELLIPSOIDS && TRIANGLE_TEST == TRIANGLE_WATERTIGHT) {

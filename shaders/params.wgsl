@@ -172,6 +172,9 @@ struct EyeTriangle {
 struct BinItem {
     reference: u32,
     near: f32,
+    // The bin's pixels whose rays may meet it: col0, row0, col1, row1 (inclusive, from the
+    // bin's corner), a byte each from the lowest (gpu::binning::Bins::band).
+    pixels: u32,
 }
 
 // The course's PhongMaterial (scene::Material). A vec3 and a scalar share each 16 bytes,

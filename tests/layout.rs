@@ -181,7 +181,11 @@ fn host_structs_match_the_shader() {
         &m,
         "BinItem",
         size_of::<BinItem>(),
-        &[("reference", offset_of!(BinItem, reference)), ("near", offset_of!(BinItem, near))],
+        &[
+            ("reference", offset_of!(BinItem, reference)),
+            ("near", offset_of!(BinItem, near)),
+            ("pixels", offset_of!(BinItem, pixels)),
+        ],
     );
     check(
         &m,

@@ -48,11 +48,13 @@ pub struct Bins {
     pub build_ms: f64,
 }
 
-/// A primitive's entry in each bin of the inclusive rectangle `[col0, row0, col1, row1]`.
+/// A primitive's entry in each bin of the inclusive rectangle `[col0, row0, col1, row1]`,
+/// and the inclusive rectangle of pixels whose rays may meet it.
 #[derive(Clone, Copy, Debug)]
 struct Placed {
     item: BinItem,
     bins: [u32; 4],
+    pixels: [u32; 4],
 }
 
 /// The lists of a band of bin rows, as the kernel reads them.
@@ -93,8 +95,8 @@ impl Bins {
                 None => box_corners(&c.bounds),
             };
             let Some(rect) = projector.pixel_rect(&corners) else { continue };
-            let item = BinItem { reference: c.reference, near: projector.near_bound(&c.bounds) };
-            placed.push(Placed { item, bins: rect.map(|v| v / BIN_SIDE) });
+            let item = BinItem { reference: c.reference, near: projector.near_bound(&c.bounds), pixels: 0 };
+            placed.push(Placed { item, bins: rect.map(|v| v / BIN_SIDE), pixels: rect });
         }
         let (lengths, row_items) = list_lengths(&placed, columns, rows);
         if !worth_it(&lengths) {
@@ -131,7 +133,7 @@ impl Bins {
         let in_band = || {
             self.placed.iter().filter(move |p| p.bins[1] <= last && p.bins[3] >= first).map(move |p| {
                 let [c0, r0, c1, r1] = p.bins;
-                (p.item, [c0, r0.max(first) - first, c1, r1.min(last) - first])
+                (p, [c0, r0.max(first) - first, c1, r1.min(last) - first])
             })
         };
         let mut counts = vec![0u32; (count * self.columns) as usize];
@@ -154,17 +156,29 @@ impl Bins {
         for (slot, range) in fill.iter_mut().zip(&ranges) {
             *slot = range[0];
         }
-        for (item, [c0, r0, c1, r1]) in in_band() {
+        for (placed, [c0, r0, c1, r1]) in in_band() {
             for row in r0..=r1 {
                 for col in c0..=c1 {
                     let slot = &mut fill[(row * self.columns + col) as usize];
-                    items[*slot as usize] = item;
+                    let pixels = pixels_in_bin(placed.pixels, col, first + row);
+                    items[*slot as usize] = BinItem { pixels, ..placed.item };
                     *slot += 1;
                 }
             }
         }
         Band { ranges, items }
     }
+}
+
+/// The part of the pixel rectangle `[col0, row0, col1, row1]` inside bin (`column`, `row`),
+/// relative to the bin's corner, a byte each from the lowest: the kernel skips an item for a
+/// packet whose pixels are all outside it (`packet_misses` in shaders/bins.wgsl). The
+/// rectangle is the one the bins were chosen by, so no ray that may meet the primitive is
+/// skipped.
+fn pixels_in_bin([c0, r0, c1, r1]: [u32; 4], column: u32, row: u32) -> u32 {
+    let (x, y) = (column * BIN_SIDE, row * BIN_SIDE);
+    let inside = |v: u32, corner: u32| v.clamp(corner, corner + BIN_SIDE - 1) - corner;
+    inside(c0, x) | inside(r0, y) << 8 | inside(c1, x) << 16 | inside(r1, y) << 24
 }
 
 /// The lengths of the frame's lists, and the items of each bin row, counted row by row

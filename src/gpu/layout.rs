@@ -148,6 +148,9 @@ pub struct EyeTriangle {
 pub struct BinItem {
     pub reference: u32,
     pub near: f32,
+    /// The pixels of the bin whose rays may meet it, `[col0, row0, col1, row1]` inclusive
+    /// and relative to the bin's corner, a byte each from the lowest.
+    pub pixels: u32,
 }
 
 /// WGSL `Material`: [`crate::scene::Material`] in f32, each colour paired with a scalar
