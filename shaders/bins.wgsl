@@ -62,14 +62,14 @@ fn packet_misses(pixels: u32, x: u32, y0: u32, y1: u32) -> bool {
     return x < c0 || x > c1 || y1 < r0 || y0 > r1;
 }
 
-// The closest hits of the packet among the primitives listed in its bin, nearest first.
-// The list, and so the loop, is the same for every invocation of the workgroup. Each item
-// is loaded once and tested against the PACKET rays (on lavapipe a load costs a gather per
-// lane group even when every lane reads one address: docs/lavapipe.md); the walk stops
-// once every ray's closest hit is nearer than the next item can be.
-// The packet's pixels are column `column`, image rows `first_row` … `last_row`, all in the bin.
-fn walk_bin_packet(bin: u32, column: u32, first_row: u32, last_row: u32, tmin: f32) {
-    let range = bin_ranges[bin];
+// The closest hits of the packet (pixels of column `column`, image rows `first_row` …
+// `last_row`, all in one bin) among the primitives listed in its bin, nearest first. Each
+// item is loaded once and tested against the PACKET rays (on lavapipe a load costs a gather
+// per lane group even when every lane reads one address: docs/lavapipe.md), unless none of
+// the packet's pixels is in its rectangle; the walk stops once every ray's closest hit is
+// nearer than the next item can be.
+fn walk_bin_packet(column: u32, first_row: u32, last_row: u32, tmin: f32) {
+    let range = bin_ranges[bin_of(column, first_row)];
     let x = column % BIN_SIDE;
     let y0 = first_row % BIN_SIDE;
     let y1 = last_row % BIN_SIDE;

@@ -111,7 +111,7 @@ fn main_bins(@builtin(global_invocation_id) id: vec3<u32>) {
         }
         packet_hits[r] = closest_plane(packet_rays[r], tmin);
     }
-    walk_bin_packet(bin_of(i, base), i, base, base + PACKET - 1u, tmin);
+    walk_bin_packet(i, base, base + PACKET - 1u, tmin);
     var shaded: array<Shaded, PACKET>;
     for (var r = 0u; r < PACKET; r++) {
         shaded[r] = shade_pixel(packet_rays[r], packet_hits[r]);

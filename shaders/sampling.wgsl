@@ -128,7 +128,7 @@ fn main_samples_bins(@builtin(global_invocation_id) id: vec3<u32>) {
         }
         packet_hits[q] = closest_plane(packet_rays[q], tmin);
     }
-    walk_bin_packet(bin_of(i, base), i, base, base + rows - 1u, tmin);
+    walk_bin_packet(i, base, base + rows - 1u, tmin);
     var shaded: array<Shaded, PACKET>;
     for (var q = 0u; q < PACKET; q++) {
         shaded[q] = shade_pixel(packet_rays[q], packet_hits[q]);

@@ -48,13 +48,19 @@ pub struct Bins {
     pub build_ms: f64,
 }
 
-/// A primitive's entry in each bin of the inclusive rectangle `[col0, row0, col1, row1]`,
-/// and the inclusive rectangle of pixels whose rays may meet it.
+/// A primitive's entry in the bins holding the inclusive rectangle `[col0, row0, col1,
+/// row1]` of pixels whose rays may meet it.
 #[derive(Clone, Copy, Debug)]
 struct Placed {
     item: BinItem,
-    bins: [u32; 4],
     pixels: [u32; 4],
+}
+
+impl Placed {
+    /// The inclusive rectangle of bins that list it.
+    fn bins(&self) -> [u32; 4] {
+        self.pixels.map(|v| v / BIN_SIDE)
+    }
 }
 
 /// The lists of a band of bin rows, as the kernel reads them.
@@ -96,7 +102,7 @@ impl Bins {
             };
             let Some(rect) = projector.pixel_rect(&corners) else { continue };
             let item = BinItem { reference: c.reference, near: projector.near_bound(&c.bounds), pixels: 0 };
-            placed.push(Placed { item, bins: rect.map(|v| v / BIN_SIDE), pixels: rect });
+            placed.push(Placed { item, pixels: rect });
         }
         let (lengths, row_items) = list_lengths(&placed, columns, rows);
         if !worth_it(&lengths) {
@@ -131,9 +137,9 @@ impl Bins {
         // Every primitive is looked at for every band: O(primitives) a tile (bunny_40k: a
         // fraction of a millisecond), and no memory beyond the frame's placements.
         let in_band = || {
-            self.placed.iter().filter(move |p| p.bins[1] <= last && p.bins[3] >= first).map(move |p| {
-                let [c0, r0, c1, r1] = p.bins;
-                (p, [c0, r0.max(first) - first, c1, r1.min(last) - first])
+            self.placed.iter().filter_map(move |p| {
+                let [c0, r0, c1, r1] = p.bins();
+                (r0 <= last && r1 >= first).then_some((p, [c0, r0.max(first) - first, c1, r1.min(last) - first]))
             })
         };
         let mut counts = vec![0u32; (count * self.columns) as usize];
@@ -185,7 +191,7 @@ fn pixels_in_bin([c0, r0, c1, r1]: [u32; 4], column: u32, row: u32) -> u32 {
 /// (a row of counts at a time, never the frame's).
 fn list_lengths(placed: &[Placed], columns: u32, rows: u32) -> (ListLengths, Vec<u64>) {
     let mut by_first_row: Vec<&Placed> = placed.iter().collect();
-    by_first_row.sort_by_key(|p| p.bins[1]);
+    by_first_row.sort_by_key(|p| p.bins()[1]);
     let mut next = by_first_row.iter().peekable();
     let mut active: Vec<&Placed> = Vec::new();
     // Differences between neighbouring columns' counts.
@@ -193,14 +199,14 @@ fn list_lengths(placed: &[Placed], columns: u32, rows: u32) -> (ListLengths, Vec
     let (mut total, mut max) = (0u64, 0u32);
     let mut row_items = Vec::with_capacity(rows as usize);
     for row in 0..rows {
-        active.retain(|p| p.bins[3] >= row);
-        while let Some(p) = next.next_if(|p| p.bins[1] == row) {
+        active.retain(|p| p.bins()[3] >= row);
+        while let Some(p) = next.next_if(|p| p.bins()[1] == row) {
             active.push(p);
         }
         steps.fill(0);
         let mut items = 0u64;
         for p in &active {
-            let [c0, _, c1, _] = p.bins;
+            let [c0, _, c1, _] = p.bins();
             steps[c0 as usize] += 1;
             steps[c1 as usize + 1] -= 1;
             items += u64::from(c1 - c0 + 1);

@@ -174,12 +174,11 @@ pub fn check(scene: &Scene, options: &RenderOptions) -> Result<(), PrecisionErro
     let triangles = checker.triangles.get();
     if resolution <= if triangles { MAX_RESOLUTION_TRIANGLES } else { MAX_RESOLUTION_SMOOTH } {
         // The camera's resolution first: it is written before any sphere.
-        if let Some((ratio, location, what)) = checker.smallest_sphere.get().filter(|s| s.0 > MAX_DISTANCE_OVER_RADIUS)
-        {
+        if let Some((ratio, location)) = checker.smallest_sphere.get().filter(|s| s.0 > MAX_DISTANCE_OVER_RADIUS) {
             return Err(PrecisionError {
                 file: scene.path.clone(),
                 location: Some(location),
-                what: what.to_string(),
+                what: "Sphere radius".to_string(),
                 magnitude: ratio,
                 range: String::new(),
                 limit: Limit::SphereSize,
@@ -206,9 +205,9 @@ struct Checker<'a> {
     /// Whether any triangle was seen: the edges a mesh's triangles share decide which
     /// normal a pixel shows, so they need a finer resolution than silhouettes.
     triangles: std::cell::Cell<bool>,
-    /// The sphere farthest from the camera for its size: distance over radius, where its
-    /// radius (or the Transform that scaled it) was written, and what that place holds.
-    smallest_sphere: std::cell::Cell<Option<(f64, Location, &'static str)>>,
+    /// The sphere farthest from the camera for its size: distance over radius, and where its
+    /// radius (or the Transform that scaled it) was written.
+    smallest_sphere: std::cell::Cell<Option<(f64, Location)>>,
 }
 
 fn in_range(magnitude: f64) -> bool {
@@ -237,10 +236,10 @@ impl Checker<'_> {
     }
 
     /// Notes a sphere's distance from the camera over its radius, for its normals.
-    fn sphere_size(&self, distance: f64, radius: f64, location: Location, what: &'static str) {
+    fn sphere_size(&self, distance: f64, radius: f64, location: Location) {
         let ratio = distance / radius;
-        if self.smallest_sphere.get().is_none_or(|(largest, ..)| ratio > largest) {
-            self.smallest_sphere.set(Some((ratio, location, what)));
+        if self.smallest_sphere.get().is_none_or(|(largest, _)| ratio > largest) {
+            self.smallest_sphere.set(Some((ratio, location)));
         }
     }
 
@@ -320,12 +319,13 @@ impl Checker<'_> {
         let [center_at, radius_at, scaled_at] = at;
         let linear = DMat3::from_mat4(*matrix);
         if let Some(scale) = super::flatten::similarity_scale(&linear) {
-            let centre = matrix.transform_point3(center);
-            self.reaches(max_norm(centre) + radius * scale);
+            let (centre, world_radius) = (matrix.transform_point3(center), radius * scale);
+            let farthest = max_norm(centre) + world_radius;
+            self.reaches(farthest);
             self.vector(center_at, "Sphere center", centre)?;
             let at = if scale == 1.0 { radius_at } else { scaled_at };
-            self.scalar(Some(at), "Sphere radius", radius * scale)?;
-            self.sphere_size(max_norm(centre) + radius * scale, radius * scale, at, "Sphere radius");
+            self.scalar(Some(at), "Sphere radius", world_radius)?;
+            self.sphere_size(farthest, world_radius, at);
             return Ok(());
         }
         let to_world = *matrix * DMat4::from_translation(center) * DMat4::from_scale(DVec3::splat(radius));
