@@ -97,7 +97,7 @@ fn main_samples(@builtin(global_invocation_id) id: vec3<u32>) {
 
 // With bins: a packet of PACKET samples per invocation, which walk one bin together. A bin
 // lists what any ray through its pixels can meet, anywhere in them
-// (gpu::binning::PAD_PIXELS). With PACKET samples or more a pixel, a packet holds samples
+// (gpu::binning::Bins::build, its `reach`). With PACKET samples or more a pixel, a packet holds samples
 // PACKET·z … of one pixel (one past the last repeats it, traced but not written); with
 // fewer (1 or 2), every sample of PACKET / count rows of one column, as `main_bins` stacks
 // rows, the rows starting at a multiple of that count so that a packet never straddles two

@@ -709,17 +709,19 @@ fn gpu_hierarchy_matches_flat_loops() {
 /// lavapipe ends an invocation's loops after 65535 iterations in all (docs/lavapipe.md), so
 /// the walk of a bin may spend one iteration per item and no more: the loops over the
 /// packet's rays inside it must be unrolled. Here one bin lists 20 000 slivers that no
-/// pixel's ray meets (inside the bin's one-pixel padding, just right of the image), nearer
-/// than a wall behind them, which every ray hits: it is the last item of the list, so a
-/// walk cut short by the limit leaves pixels empty.
+/// pixel's ray meets (diagonals across the bin, between its pixels' centres), nearer than a
+/// wall behind them, which every ray hits: it is the last item of the list, so a walk cut
+/// short by the limit leaves pixels empty.
 #[test]
 fn gpu_bins_walk_long_lists_to_the_end() {
     use raycaster::gpu::Acceleration;
     use raycaster::render::RenderOptions;
     let Some(bins) = common::gpu_with(Acceleration::Bins) else { return };
     const SLIVERS: usize = 20_000;
-    // Angle 90°: a ray through column i of 8 has slope (i + ½ − 4)/4 ≤ 0.875 in x; the
-    // slivers span slopes 1.1 to 1.2, pixel columns 7.9 to 8.3, listed with the padding.
+    // Angle 90°: the ray through column i and row j (from the bottom) of 8 has slopes
+    // ((i − 3.5)/4, (j − 3.5)/4), whose difference is a multiple of ¼. The slivers lie
+    // where that difference is between 0.115 and 0.135, so no ray meets them, while their
+    // bounds hold the centres of columns 1 to 7 and of every row.
     let mut text = String::from(
         "PerspectiveCamera { center 0 0 0 direction 0 0 -1 up 0 1 0 angle 90 }
          Lights { numLights 1 DirectionalLight { direction 0 0 -1 color 1 1 1 } }
@@ -729,15 +731,16 @@ fn gpu_bins_walk_long_lists_to_the_end() {
     text.push_str(&format!("Group {{ numObjects {} MaterialIndex 0\n", SLIVERS + 1));
     for k in 0..SLIVERS {
         let d = 1.0 + k as f64 * 4e-4;
-        let (x0, x1, y) = (1.1 * d, 1.2 * d, 0.1 * d);
+        let [a, b, c] =
+            [(-0.95 + 0.115, -0.95), (0.95 + 0.115, 0.95), (0.95 + 0.135, 0.95)].map(|(x, y)| (x * d, y * d));
         text.push_str(&format!(
-            "Triangle {{ vertex0 {x0} {} {} vertex1 {x1} {} {} vertex2 {x0} {y} {} }}\n",
-            -y, -d, -y, -d, -d
+            "Triangle {{ vertex0 {} {} {} vertex1 {} {} {} vertex2 {} {} {} }}\n",
+            a.0, a.1, -d, b.0, b.1, -d, c.0, c.1, -d
         ));
     }
     text.push_str("Triangle { vertex0 -1000 -1000 -100 vertex1 1000 -1000 -100 vertex2 0 1000 -100 } }\n");
     let scene = raycaster::scene::parse_scene(&text, "slivers.txt".as_ref()).unwrap();
-    let options = RenderOptions::all(8, 8);
+    let options = RenderOptions { stats: true, ..RenderOptions::all(8, 8) };
     let mut frame = raycaster::render::Frame::new(&options);
     let stats = bins
         .render_tiles(&scene, &options, |first_row, tile| {
@@ -746,6 +749,11 @@ fn gpu_bins_walk_long_lists_to_the_end() {
         })
         .unwrap();
     assert_eq!(stats.acceleration, Acceleration::Bins);
+    // Every pixel walked the whole list (a walk cut short would be handed to the reference).
+    assert_eq!(stats.pixels_cut_short, 0, "walks cut short by the loop limit");
+    let tests = stats.counted.unwrap().intersections;
+    // Column 0's rays skip them (outside their rectangle); the 56 others test each.
+    assert!(tests >= (56 * SLIVERS) as u64, "{tests} ray/triangle tests: the slivers are not in the bin's list");
     let missed = frame.hit.iter().filter(|&&h| !h).count();
     assert_eq!(missed, 0, "{missed} of 64 pixels missed the wall at the end of the bin's list");
     for (k, depth) in frame.depth.iter().enumerate() {

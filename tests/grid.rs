@@ -667,6 +667,7 @@ fn gpu_stats_agree_with_the_reference() {
             &rays,
             &raycaster::gpu::GpuOptions::default(),
             false,
+            false,
             Some(raycaster::gpu::flatten::GridChoice::Walk(size)),
         );
         let kernel_grid = buffers.grid.unwrap();

@@ -14,6 +14,7 @@
 //! (orthographic) with edge planes computed once per frame ([`EyeTriangle`]).
 
 use super::layout::{BinItem, EyeTriangle, GpuTriangle, PrimitiveKind};
+use super::precision;
 use crate::bvh::Aabb;
 use crate::camera::PrimaryRays;
 use glam::{DVec3, Vec3};
@@ -21,12 +22,13 @@ use glam::{DVec3, Vec3};
 /// Pixels on a side of a bin: the kernel's workgroup.
 pub const BIN_SIDE: u32 = super::WORKGROUP;
 
-/// Pixels of padding around each primitive's projected bounds: the f32 rays of the kernel
-/// deviate from the exact ones by far less than a pixel. (Samples anywhere in a pixel,
-/// docs/SPEC.md §8, need none: pixel i's lie within ½ of its centre, so only pixels
-/// i > x₀ − ½ can meet bounds starting at x₀, and rounding the rectangle out to whole
-/// pixels, ⌊x₀ − pad⌋, already takes in every one of them.)
-const PAD_PIXELS: f64 = 1.0;
+/// The kernel's rounding error, in pixels, per unit of the scene's resolution R
+/// ([`precision::resolution`]), padded for the bins. A primary ray's direction (or
+/// orthographic origin) and a triangle's edge planes each carry a few roundings of f32, so the
+/// kernel may take a ray for inside an edge up to about 10·2⁻²⁴ of the distance beyond it
+/// (the precision module's contract), which is 10·2⁻²⁴·R pixels on the screen; 2⁻¹⁶ is 25
+/// times that. (bunny_40k at 512², R ≈ 955: 0.015 pixel; at the triangle bound R = 2¹⁷: 2.)
+const PAD_PER_RESOLUTION: f64 = 1.0 / 65_536.0;
 
 /// The bins of one frame, built band by band: the frame keeps, per primitive, its place
 /// (which bins it is listed in, and where in their lists), and [`Bins::band`] fills the
@@ -81,17 +83,23 @@ pub struct Candidate {
 }
 
 impl Bins {
-    /// Bins `candidates` for the image `rays` describes, or `None` when `worth_it` turns
-    /// down the lists' lengths, which are known before any list is filled (so a scene that
-    /// goes to the hierarchy pays only for the projection and the count).
+    /// Bins `candidates` for the image `rays` describes, whose pixels cast their rays up to
+    /// `reach` pixels from their centres (0 for one ray through each centre, ½ for samples
+    /// anywhere in the pixel), or `None` when `worth_it` turns down the lists' lengths,
+    /// which are known before any list is filled (so a scene that goes to the hierarchy
+    /// pays only for the projection and the count).
     pub fn build(
         rays: &PrimaryRays,
         triangles: &[GpuTriangle],
         candidates: &[Candidate],
+        reach: f64,
         worth_it: impl FnOnce(&ListLengths) -> bool,
     ) -> Option<Bins> {
         let start = crate::clock::Instant::now();
-        let projector = Projector::new(rays);
+        let farthest =
+            candidates.iter().map(|c| c.bounds.min.abs().max(c.bounds.max.abs()).max_element()).fold(0.0, f32::max);
+        let rounding = precision::resolution(rays, f64::from(farthest)) * PAD_PER_RESOLUTION;
+        let projector = Projector::new(rays, reach + rounding);
         let columns = rays.width.div_ceil(BIN_SIDE);
         let rows = rays.height.div_ceil(BIN_SIDE);
         let mut placed: Vec<Placed> = Vec::with_capacity(candidates.len());
@@ -276,11 +284,15 @@ struct Projector {
     up: DVec3,
     width: u32,
     height: u32,
+    /// How far from its centre a pixel's ray may pass, in pixels: its samples' reach and the
+    /// kernel's rounding.
+    pad: f64,
 }
 
 impl Projector {
-    fn new(rays: &PrimaryRays) -> Projector {
+    fn new(rays: &PrimaryRays, pad: f64) -> Projector {
         Projector {
+            pad,
             orthographic: rays.orthographic,
             direction: rays.direction.normalize(),
             forward: rays.direction,
@@ -309,9 +321,10 @@ impl Projector {
 
     /// The inclusive pixel rectangle `[col0, row0, col1, row1]` (rows from the top) that
     /// holds every pixel whose ray may meet the convex hull of `points`, or `None` when no
-    /// pixel's can. Perspective projection maps the hull of points in front of the eye onto
-    /// the hull of their images, so their extremes bound it; a hull reaching the eye plane
-    /// may be seen anywhere.
+    /// pixel's can: those whose centres lie within the pad of the hull's screen bounds.
+    /// Perspective projection maps the hull of points in front of the eye onto the hull of
+    /// their images, so their extremes bound it; a hull reaching the eye plane may be seen
+    /// anywhere.
     fn pixel_rect(&self, points: &[Vec3]) -> Option<[u32; 4]> {
         let full = [0, 0, self.width - 1, self.height - 1];
         let (mut x0, mut y0, mut x1, mut y1) = (f64::MAX, f64::MAX, f64::MIN, f64::MIN);
@@ -336,9 +349,10 @@ impl Projector {
         let longer = self.width.max(self.height) as f64;
         let to_column = |x: f64| x * longer + self.width as f64 / 2.0 - 0.5;
         let to_j = |y: f64| y * longer + self.height as f64 / 2.0 - 0.5;
-        let (i0, i1) = ((to_column(x0) - PAD_PIXELS).floor(), (to_column(x1) + PAD_PIXELS).ceil());
-        let (j0, j1) = ((to_j(y0) - PAD_PIXELS).floor(), (to_j(y1) + PAD_PIXELS).ceil());
-        if i1 < 0.0 || j1 < 0.0 || i0 > (self.width - 1) as f64 || j0 > (self.height - 1) as f64 {
+        let (i0, i1) = ((to_column(x0) - self.pad).ceil(), (to_column(x1) + self.pad).floor());
+        let (j0, j1) = ((to_j(y0) - self.pad).ceil(), (to_j(y1) + self.pad).floor());
+        // A primitive between pixel centres (or off the image) is seen by no pixel.
+        if i0 > i1 || j0 > j1 || i1 < 0.0 || j1 < 0.0 || i0 > (self.width - 1) as f64 || j0 > (self.height - 1) as f64 {
             return None;
         }
         let clamp = |v: f64, hi: u32| v.clamp(0.0, hi as f64) as u32;

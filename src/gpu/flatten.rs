@@ -81,11 +81,14 @@ impl SceneBuffers {
     /// Flattens `scene` for the image `rays` describes, with a hierarchy when it has at
     /// least `bvh_min_primitives` spheres, ellipsoids and triangles. With `no_bins` (shadow,
     /// reflected or refracted rays, which bins do not hold) every ray walks the hierarchy.
+    /// `sampled`: whether pixels cast rays anywhere in them (docs/SPEC.md §8), not only
+    /// through their centres, which the bins must hold.
     pub fn new(
         scene: &Scene,
         rays: &PrimaryRays,
         options: &GpuOptions,
         no_bins: bool,
+        sampled: bool,
         grid: Option<GridChoice>,
     ) -> SceneBuffers {
         let mut buffers = SceneBuffers { orthographic: rays.orthographic, ..Default::default() };
@@ -95,7 +98,7 @@ impl SceneBuffers {
             // An explicit grid means the grid (docs/SPEC.md §7).
             Some(GridChoice::Walk(size)) => buffers.grid = Some(GpuGrid::build(&buffers, size)),
             Some(GridChoice::Given(grid)) => buffers.grid = Some(grid),
-            None => buffers.choose_acceleration(rays, options, no_bins),
+            None => buffers.choose_acceleration(rays, options, no_bins, sampled),
         }
         if let Some(bvh) = buffers.bvh.as_ref().filter(|b| b.prim_refs.is_empty()) {
             buffers.triangles = bvh.order.iter().map(|&p| buffers.triangles[p as usize]).collect();
@@ -153,7 +156,7 @@ impl SceneBuffers {
     /// Bins, a hierarchy or flat loops: what `options` asks for, or with
     /// [`Acceleration::Auto`] the cost model's choice; with `no_bins`, the hierarchy
     /// where bins were asked for.
-    fn choose_acceleration(&mut self, rays: &PrimaryRays, options: &GpuOptions, no_bins: bool) {
+    fn choose_acceleration(&mut self, rays: &PrimaryRays, options: &GpuOptions, no_bins: bool, sampled: bool) {
         let finite = self.triangles.len() + self.spheres.len() + self.ellipsoids.len();
         let auto = options.acceleration == Acceleration::Auto;
         if finite == 0 || options.acceleration == Acceleration::Flat || (auto && finite < options.bvh_min_primitives) {
@@ -164,7 +167,9 @@ impl SceneBuffers {
         if bins_asked && !no_bins {
             let candidates = binning::candidates(&self.triangles, &self.sphere_bounds, &self.ellipsoid_bounds);
             let forced = options.acceleration == Acceleration::Bins;
-            self.bins = Bins::build(rays, &self.triangles, &candidates, |lengths| {
+            // A sample lies within half a pixel of its pixel's centre (docs/SPEC.md §8).
+            let reach = if sampled { 0.5 } else { 0.0 };
+            self.bins = Bins::build(rays, &self.triangles, &candidates, reach, |lengths| {
                 forced || (lengths.mean <= BINS_MAX_MEAN_LIST && lengths.max <= LOOP_LIMIT / 2)
             });
             if self.bins.is_some() {

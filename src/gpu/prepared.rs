@@ -112,7 +112,8 @@ impl<'a> PreparedScene<'a> {
             true => GridChoice::Given(super::voxels::voxel_grid(scene, size, rays.center)),
             false => GridChoice::Walk(size),
         });
-        let mut buffers = SceneBuffers::new(scene, &rays, &gpu.options, secondary_rays, grid);
+        let mut buffers =
+            SceneBuffers::new(scene, &rays, &gpu.options, secondary_rays, options.sampling.is_some(), grid);
         if let Some(sampling) = options.sampling {
             let samples = super::texture_range::checker_samples_per_pixel(&sampling) as f32;
             for texture in buffers.textures.iter_mut().filter(|t| t.kind == GpuTexture::CHECKERBOARD) {
