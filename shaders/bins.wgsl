@@ -1,4 +1,4 @@
-// Screen-space bins (gpu::binning): a workgroup's BIN_SIDE × BIN_SIDE pixels walk one list
+// Screen-space bins (gpu::binning): the BIN_COLUMNS × BIN_ROWS pixels of a bin walk one list
 // of candidates, nearest first, the same for every invocation, in packets of PACKET rays.
 
 // The edge functions of a primary ray against a triangle's edge planes: all of one sign
@@ -42,7 +42,7 @@ fn try_binned_triangle(k: u32, ray: Ray, shear: Shear, tmin: f32, best: Closest)
 // The bin of pixel column i in image row `row` (from the top), in the band of bin rows
 // bound for this dispatch (gpu::binning::Bins::band).
 fn bin_of(i: u32, row: u32) -> u32 {
-    return (row / BIN_SIDE - P.first_bin_row) * P.bin_columns + i / BIN_SIDE;
+    return (row / BIN_ROWS - P.first_bin_row) * P.bin_columns + i / BIN_COLUMNS;
 }
 
 // The packet's rays and closest hits so far. Every loop over them has the constant trip
@@ -70,9 +70,9 @@ fn packet_misses(pixels: u32, x: u32, y0: u32, y1: u32) -> bool {
 // nearer than the next item can be.
 fn walk_bin_packet(column: u32, first_row: u32, last_row: u32, tmin: f32) {
     let range = bin_ranges[bin_of(column, first_row)];
-    let x = column % BIN_SIDE;
-    let y0 = first_row % BIN_SIDE;
-    let y1 = last_row % BIN_SIDE;
+    let x = column % BIN_COLUMNS;
+    let y0 = first_row % BIN_ROWS;
+    let y1 = last_row % BIN_ROWS;
     var shears: array<Shear, PACKET>;
     for (var r = 0u; r < PACKET; r++) {
         shears[r] = shear_for(packet_rays[r].direction);

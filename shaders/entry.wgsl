@@ -90,7 +90,7 @@ fn stats_slot(id: vec3<u32>) -> u32 {
 }
 
 // Image rows base + PACKET·y … + PACKET − 1, where base is the tile's first row rounded
-// down to a multiple of PACKET, so that a packet never straddles two bins (BIN_SIDE rows, a
+// down to a multiple of PACKET, so that a packet never straddles two bins (BIN_ROWS rows, a
 // multiple of PACKET) whatever the tile.
 @compute @workgroup_size(WORKGROUP, WORKGROUP)
 fn main_bins(@builtin(global_invocation_id) id: vec3<u32>) {

@@ -247,7 +247,7 @@ var<private> P: Params;
 // References (kind << REF_KIND_SHIFT | index into that kind's array), in leaf order.
 @group(0) @binding(9) var<storage, read> prim_refs: array<u32>;
 @group(0) @binding(10) var<storage, read> eye_triangles: array<EyeTriangle>;
-// Per bin (BIN_SIDE × BIN_SIDE pixels, row by row from P.first_bin_row, the band of bin
+// Per bin (BIN_COLUMNS × BIN_ROWS pixels, row by row from P.first_bin_row, the band of bin
 // rows the dispatch traces): first item and count.
 @group(0) @binding(11) var<storage, read> bin_ranges: array<vec2<u32>>;
 @group(0) @binding(12) var<storage, read> bin_items: array<BinItem>;

@@ -101,7 +101,7 @@ fn main_samples(@builtin(global_invocation_id) id: vec3<u32>) {
 // PACKET·z … of one pixel (one past the last repeats it, traced but not written); with
 // fewer (1 or 2), every sample of PACKET / count rows of one column, as `main_bins` stacks
 // rows, the rows starting at a multiple of that count so that a packet never straddles two
-// bins (BIN_SIDE rows, a multiple of PACKET).
+// bins (BIN_ROWS rows, a multiple of PACKET).
 @compute @workgroup_size(WORKGROUP, WORKGROUP)
 fn main_samples_bins(@builtin(global_invocation_id) id: vec3<u32>) {
     P = params;

@@ -350,12 +350,13 @@ fn primitive_kinds_match_the_host() {
 }
 
 /// The sizes the host dispatches and bins with are the kernel's: its workgroup (every entry
-/// point), its packet of rays, and the side of a bin it derives its bin index from.
+/// point), its packet of rays, and the sides of a bin it derives its bin index from.
 #[test]
 fn sizes_match_the_host() {
     let m = module();
     assert_eq!(shader_constant(&m, "PACKET"), naga::Literal::U32(raycaster::gpu::BIN_PACKET));
-    assert_eq!(shader_constant(&m, "BIN_SIDE"), naga::Literal::U32(raycaster::gpu::binning::BIN_SIDE));
+    assert_eq!(shader_constant(&m, "BIN_COLUMNS"), naga::Literal::U32(raycaster::gpu::binning::BIN_COLUMNS));
+    assert_eq!(shader_constant(&m, "BIN_ROWS"), naga::Literal::U32(raycaster::gpu::binning::BIN_ROWS));
     assert_eq!(shader_constant(&m, "WORKGROUP"), naga::Literal::U32(raycaster::gpu::WORKGROUP));
     let names: Vec<&str> = m.entry_points.iter().map(|e| e.name.as_str()).collect();
     assert_eq!(names, ["main", "main_bins", "main_samples", "main_samples_bins", "main_filter"]);

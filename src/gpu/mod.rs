@@ -40,7 +40,7 @@ pub const WORKGROUP: u32 = 8;
 pub const BIN_PACKET: u32 = 4;
 
 // A packet never straddles two bins (the kernel's `main_bins` relies on it).
-const _: () = assert!(binning::BIN_SIDE.is_multiple_of(BIN_PACKET));
+const _: () = assert!(binning::BIN_ROWS.is_multiple_of(BIN_PACKET));
 
 /// The output tile of one dispatch. Small tiles stay in the CPU's caches on lavapipe:
 /// bunny_40k at 2048² ran at 7.4 Mrays/s with 64 MiB tiles, 9.3 with 16 MiB, 9.8 with 8 MiB,

@@ -8,7 +8,7 @@
 //! renders the tiles one after another and awaits each.
 
 use super::bindings::BindingSet;
-use super::binning::{Bins, BIN_SIDE};
+use super::binning::{Bins, BIN_ROWS};
 use super::flatten::{GridChoice, SceneBuffers};
 use super::layout::{
     BinItem, GpuSampling, GpuTexture, Handover, Params, PixelLayout, PACKED_MISS, PERLIN_PERMUTATION, SAMPLE_WORDS,
@@ -554,7 +554,7 @@ struct SlotSizes {
 /// storage binding limit. (A band spans at most one bin row more than the rows' height
 /// when it does not start on a bin's edge.)
 fn band_bytes(bins: &Bins, traced_rows: u32, limit: u64) -> Result<(u64, u64), GpuError> {
-    let band_rows = ((traced_rows.max(1) - 1) / BIN_SIDE + 2).min(bins.rows);
+    let band_rows = ((traced_rows.max(1) - 1) / BIN_ROWS + 2).min(bins.rows);
     let ranges = band_rows as u64 * bins.columns as u64 * std::mem::size_of::<[u32; 2]>() as u64;
     let items = bins.most_items(band_rows).max(1) * std::mem::size_of::<BinItem>() as u64;
     if items > limit {
