@@ -31,10 +31,11 @@ pub const BIN_ROWS: u32 = super::BIN_PACKET;
 
 /// The kernel's rounding error, in pixels, per unit of the scene's resolution R
 /// ([`precision::resolution`]), padded for the bins. A primary ray's direction (or
-/// orthographic origin) and a triangle's edge planes each carry a few roundings of f32, so the
-/// kernel may take a ray for inside an edge up to about 10·2⁻²⁴ of the distance beyond it
-/// (the precision module's contract), which is 10·2⁻²⁴·R pixels on the screen; 2⁻¹⁶ is 25
-/// times that. (bunny_40k at 512², R ≈ 955: 0.015 pixel; at the triangle bound R = 2¹⁷: 2.)
+/// orthographic origin), a triangle's edge planes and the dot products between them each
+/// round to f32 a few times, about ten units of 2⁻²⁴ in all, so the kernel may take a ray
+/// for inside an edge up to about 10·2⁻²⁴ of the distance beyond it: 10·2⁻²⁴·R pixels on
+/// the screen (the precision module's account of f32's error). 2⁻¹⁶ is 25 times that.
+/// (bunny_40k at 512², R ≈ 955: 0.015 pixel; at the triangle bound R = 2¹⁷: 2.)
 const PAD_PER_RESOLUTION: f64 = 1.0 / 65_536.0;
 
 /// The bins of one frame, built band by band: the frame keeps, per primitive, its place
