@@ -45,11 +45,14 @@ fn bin_of(i: u32, row: u32) -> u32 {
     return (row / BIN_ROWS - P.first_bin_row) * P.bin_columns + i / BIN_COLUMNS;
 }
 
-// The packet's rays and closest hits so far. Every loop over them has the constant trip
-// count PACKET, which the compiler unrolls, so they live in registers; a loop left rolled
-// would also count against lavapipe's 65535 iterations per invocation (docs/lavapipe.md).
+// The packet's rays and closest hits so far. Code over them is written out for each of the
+// PACKET rays (a function called with rows 0 … 3), never a loop: lavapipe lowers a loop's
+// indexing of these arrays before it unrolls the loop, and that made the pipeline of
+// `main_bins` take 29 ms longer to create (docs/lavapipe.md); a loop would also count
+// against its 65535 iterations per invocation.
 var<private> packet_rays: array<Ray, PACKET>;
 var<private> packet_hits: array<Closest, PACKET>;
+const_assert PACKET == 4u;
 
 // Whether a packet of pixels in column x and rows y0 … y1 of a bin (all relative to the
 // bin's corner) lies outside an item's pixel rectangle (BinItem.pixels): then none of its
@@ -68,21 +71,36 @@ fn packet_misses(pixels: u32, x: u32, y0: u32, y1: u32) -> bool {
 // per lane group even when every lane reads one address: docs/lavapipe.md), unless none of
 // the packet's pixels is in its rectangle; the walk stops once every ray's closest hit is
 // nearer than the next item can be.
+// Row r of the packet against a triangle from the bins (the watertight test's primary-ray
+// form), or against any primitive by reference.
+fn test_eye(r: u32, tri: EyeTriangle, reference: u32, tmin: f32) {
+    count(COUNT_TESTS);
+    packet_hits[r] = nearer(packet_hits[r], eye_triangle_t(tri, packet_rays[r], tmin), KIND_TRIANGLE, reference);
+}
+
+fn test_ref(r: u32, reference: u32, shear: Shear, tmin: f32) {
+    packet_hits[r] = try_ref(reference, packet_rays[r], shear, tmin, packet_hits[r], true);
+}
+
 fn walk_bin_packet(column: u32, first_row: u32, last_row: u32, tmin: f32) {
     let range = bin_ranges[bin_of(column, first_row)];
     let x = column % BIN_COLUMNS;
     let y0 = first_row % BIN_ROWS;
     let y1 = last_row % BIN_ROWS;
+    // Triangles alone, with the watertight test: every item takes test_eye.
+    let eye_only = !HAS_SPHERES && !HAS_ELLIPSOIDS && TRIANGLE_TEST == TRIANGLE_WATERTIGHT;
     var shears: array<Shear, PACKET>;
-    for (var r = 0u; r < PACKET; r++) {
-        shears[r] = shear_for(packet_rays[r].direction);
+    if (!eye_only) {
+        shears = array<Shear, PACKET>(
+            shear_for(packet_rays[0].direction),
+            shear_for(packet_rays[1].direction),
+            shear_for(packet_rays[2].direction),
+            shear_for(packet_rays[3].direction),
+        );
     }
     for (var k = range.x; k < range.x + range.y; k++) {
         let item = bin_items[k];
-        var farthest = packet_hits[0].t;
-        for (var r = 1u; r < PACKET; r++) {
-            farthest = max(farthest, packet_hits[r].t);
-        }
+        let farthest = max(max(packet_hits[0].t, packet_hits[1].t), max(packet_hits[2].t, packet_hits[3].t));
         if (item.near > farthest) {
             break;
         }
@@ -90,16 +108,17 @@ fn walk_bin_packet(column: u32, first_row: u32, last_row: u32, tmin: f32) {
             continue;
         }
         let reference = item.reference;
-        if (!HAS_SPHERES && !HAS_ELLIPSOIDS && TRIANGLE_TEST == TRIANGLE_WATERTIGHT) {
+        if (eye_only) {
             let tri = eye_triangles[reference];
-            for (var r = 0u; r < PACKET; r++) {
-                count(COUNT_TESTS);
-                packet_hits[r] = nearer(packet_hits[r], eye_triangle_t(tri, packet_rays[r], tmin), KIND_TRIANGLE, reference);
-            }
+            test_eye(0u, tri, reference, tmin);
+            test_eye(1u, tri, reference, tmin);
+            test_eye(2u, tri, reference, tmin);
+            test_eye(3u, tri, reference, tmin);
             continue;
         }
-        for (var r = 0u; r < PACKET; r++) {
-            packet_hits[r] = try_ref(reference, packet_rays[r], shears[r], tmin, packet_hits[r], true);
-        }
+        test_ref(0u, reference, shears[0], tmin);
+        test_ref(1u, reference, shears[1], tmin);
+        test_ref(2u, reference, shears[2], tmin);
+        test_ref(3u, reference, shears[3], tmin);
     }
 }

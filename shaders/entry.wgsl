@@ -89,6 +89,17 @@ fn stats_slot(id: vec3<u32>) -> u32 {
     return id.x + WORKGROUP * id.y;
 }
 
+// Row r of a packet starting at image row `base` (tile-relative `first`): its ray and its
+// nearest plane. A row outside the tile is traced with its packet but not a pixel of it:
+// its ray is not counted (its tests are: the kernel ran them).
+fn start_row(r: u32, i: u32, base: u32, first: i32, tmin: f32) {
+    packet_rays[r] = ray_of_row(i, base + r);
+    if (u32(first + i32(r)) < P.tile_rows) {
+        count(COUNT_RAYS);
+    }
+    packet_hits[r] = closest_plane(packet_rays[r], tmin);
+}
+
 // Image rows base + PACKET·y … + PACKET − 1, where base is the tile's first row rounded
 // down to a multiple of PACKET, so that a packet never straddles two bins (BIN_ROWS rows, a
 // multiple of PACKET) whatever the tile.
@@ -102,27 +113,23 @@ fn main_bins(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let tmin = t_min();
-    for (var r = 0u; r < PACKET; r++) {
-        packet_rays[r] = ray_of_row(i, base + r);
-        // A row outside the tile is traced with its packet but not a pixel of it: its ray
-        // is not counted (its tests are: the kernel ran them).
-        if (u32(first + i32(r)) < P.tile_rows) {
-            count(COUNT_RAYS);
-        }
-        packet_hits[r] = closest_plane(packet_rays[r], tmin);
-    }
+    start_row(0u, i, base, first, tmin);
+    start_row(1u, i, base, first, tmin);
+    start_row(2u, i, base, first, tmin);
+    start_row(3u, i, base, first, tmin);
     walk_bin_packet(i, base, base + PACKET - 1u, tmin);
-    var shaded: array<Shaded, PACKET>;
-    for (var r = 0u; r < PACKET; r++) {
-        shaded[r] = shade_pixel(packet_rays[r], packet_hits[r]);
-    }
+    let s0 = shade_pixel(packet_rays[0], packet_hits[0]);
+    let s1 = shade_pixel(packet_rays[1], packet_hits[1]);
+    let s2 = shade_pixel(packet_rays[2], packet_hits[2]);
+    let s3 = shade_pixel(packet_rays[3], packet_hits[3]);
     // One canary for the invocation, after all of its loops: past the limit only the first
     // canary runs short, a second one runs in full (tests/loop_limit.rs found the packet's
     // last three rows wrong and unmarked with one canary per row).
     let cut = LOOP_CANARY && loops_were_cut();
-    for (var r = 0u; r < PACKET; r++) {
-        write_row(i, first + i32(r), shaded[r], cut);
-    }
+    write_row(i, first, s0, cut);
+    write_row(i, first + 1, s1, cut);
+    write_row(i, first + 2, s2, cut);
+    write_row(i, first + 3, s3, cut);
     if (!cut) {
         flush_counts(stats_slot(id));
     }

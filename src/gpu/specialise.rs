@@ -253,7 +253,7 @@ fn cut_decided_branches(block: &mut Block, exprs: &naga::Arena<Expression>, know
             }
             _ => {}
         }
-        let ends = always_returns(&statement);
+        let ends = always_leaves(&statement);
         block.push(statement, span);
         if ends {
             // What follows a return never runs (`if (BOUNCES == 0u) { return color; }`
@@ -264,13 +264,14 @@ fn cut_decided_branches(block: &mut Block, exprs: &naga::Arena<Expression>, know
     cut
 }
 
-/// Whether `statement` returns on every path through it.
-fn always_returns(statement: &Statement) -> bool {
+/// Whether `statement` leaves the block it is in on every path through it: it returns, or
+/// continues or breaks out of the loop or switch around it.
+fn always_leaves(statement: &Statement) -> bool {
     match statement {
-        Statement::Return { .. } | Statement::Kill => true,
-        Statement::Block(inner) => inner.last().is_some_and(always_returns),
+        Statement::Return { .. } | Statement::Kill | Statement::Break | Statement::Continue => true,
+        Statement::Block(inner) => inner.last().is_some_and(always_leaves),
         Statement::If { accept, reject, .. } => {
-            accept.last().is_some_and(always_returns) && reject.last().is_some_and(always_returns)
+            accept.last().is_some_and(always_leaves) && reject.last().is_some_and(always_leaves)
         }
         _ => false,
     }
@@ -311,6 +312,29 @@ mod tests {
         assert!(off.overrides.is_empty());
         let on = specialise(&module, &[("FEATURE", 1.0), ("DEPTH", 2.0)], "main");
         assert_eq!(function_names(&on), ["costly", "also_costly", "kept"]);
+    }
+
+    /// What follows a `continue` that the constants leave unconditional is cut, with what
+    /// only it calls; with the branch undecided, it stays.
+    #[test]
+    fn what_follows_a_decided_continue_is_cut() {
+        let module = parse(
+            "
+            override FAST: bool = false;
+            @group(0) @binding(0) var<storage, read_write> out: array<u32>;
+            fn fast(x: u32) -> u32 { return x + 1u; }
+            fn general(x: u32) -> u32 { return x * 3u; }
+            @compute @workgroup_size(1) fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+                var v = id.x;
+                for (var k = 0u; k < 4u; k++) {
+                    if (FAST) { v = fast(v); continue; }
+                    v = general(v);
+                }
+                out[id.x] = v;
+            }",
+        );
+        assert_eq!(function_names(&specialise(&module, &[("FAST", 1.0)], "main")), ["fast"]);
+        assert_eq!(function_names(&specialise(&module, &[("FAST", 0.0)], "main")), ["general"]);
     }
 
     /// The kernel's features reach the driver only when switched on: solid textures (Perlin's
