@@ -114,35 +114,48 @@ fn main_samples_bins(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let tmin = t_min();
-    var rows_of: array<u32, PACKET>;
-    var samples_of: array<u32, PACKET>;
-    for (var q = 0u; q < PACKET; q++) {
-        let row = min(q / per_row, rows - 1u);
-        rows_of[q] = base + row;
-        samples_of[q] = first + q - row * per_row;
-        let j = P.height - 1u - rows_of[q];
-        let k = min(samples_of[q], sampling.count - 1u);
-        packet_rays[q] = primary_ray_at(i, j, sample_position(i, j, k));
-        if (sample_is_written(rows_of[q], samples_of[q]) && row_is_in_tile(rows_of[q])) {
-            count(COUNT_RAYS);
-        }
-        packet_hits[q] = closest_plane(packet_rays[q], tmin);
-    }
+    // Each slot written out, as in main_bins (no loop indexes the packet's arrays).
+    let at0 = start_sample(0u, i, base, first, per_row, rows, tmin);
+    let at1 = start_sample(1u, i, base, first, per_row, rows, tmin);
+    let at2 = start_sample(2u, i, base, first, per_row, rows, tmin);
+    let at3 = start_sample(3u, i, base, first, per_row, rows, tmin);
     walk_bin_packet(i, base, base + rows - 1u, tmin);
-    var shaded: array<Shaded, PACKET>;
-    for (var q = 0u; q < PACKET; q++) {
-        shaded[q] = shade_pixel(packet_rays[q], packet_hits[q]);
-    }
+    let s0 = shade_pixel(packet_rays[0], packet_hits[0]);
+    let s1 = shade_pixel(packet_rays[1], packet_hits[1]);
+    let s2 = shade_pixel(packet_rays[2], packet_hits[2]);
+    let s3 = shade_pixel(packet_rays[3], packet_hits[3]);
     // One canary after all of the invocation's loops, as in main_bins.
     let cut = LOOP_CANARY && loops_were_cut();
-    for (var q = 0u; q < PACKET; q++) {
-        if (sample_is_written(rows_of[q], samples_of[q])) {
-            write_sample(i, rows_of[q] - sampling.first_row, samples_of[q], shaded[q], cut);
-        }
-    }
+    finish_sample(i, at0, s0, cut);
+    finish_sample(i, at1, s1, cut);
+    finish_sample(i, at2, s2, cut);
+    finish_sample(i, at3, s3, cut);
     // The packet's rows that are the tile's (not the filter's overlap) count its tests.
     if (!cut && base < P.first_row + P.tile_rows && base + rows > P.first_row) {
         flush_counts(stats_slot(id));
+    }
+}
+
+// Slot q of a packet of `main_samples_bins` (see there): its ray and nearest plane; returns
+// its image row and sample.
+fn start_sample(q: u32, i: u32, base: u32, first: u32, per_row: u32, rows: u32, tmin: f32) -> vec2<u32> {
+    let row = min(q / per_row, rows - 1u);
+    let image_row = base + row;
+    let sample = first + q - row * per_row;
+    let j = P.height - 1u - image_row;
+    let k = min(sample, sampling.count - 1u);
+    packet_rays[q] = primary_ray_at(i, j, sample_position(i, j, k));
+    if (sample_is_written(image_row, sample) && row_is_in_tile(image_row)) {
+        count(COUNT_RAYS);
+    }
+    packet_hits[q] = closest_plane(packet_rays[q], tmin);
+    return vec2<u32>(image_row, sample);
+}
+
+// Writes a slot's sample (image row and sample `at`) where the tile holds it.
+fn finish_sample(i: u32, at: vec2<u32>, shaded: Shaded, cut: bool) {
+    if (sample_is_written(at.x, at.y)) {
+        write_sample(i, at.x - sampling.first_row, at.y, shaded, cut);
     }
 }
 
