@@ -27,7 +27,8 @@ use wgpu::util::DeviceExt;
 /// A scene ready on the device for one image size and set of outputs.
 pub struct PreparedScene<'a> {
     gpu: &'a GpuRenderer,
-    pipeline: wgpu::ComputePipeline,
+    /// The kernel of a render without sampling (`sampled` holds the others).
+    pipeline: Option<wgpu::ComputePipeline>,
     /// Pixels per invocation ([`KernelConfig::packet`]).
     packet: u32,
     layout: PixelLayout,
@@ -137,7 +138,8 @@ impl<'a> PreparedScene<'a> {
             }
         };
         let bindings = gpu.bindings_for(&stages, &scene.path)?;
-        let pipeline = gpu.pipeline(config, &bindings);
+        // A sampled render dispatches its samples and filter kernels only.
+        let pipeline = options.sampling.is_none().then(|| gpu.pipeline(config, &bindings));
         let inputs = upload_inputs(gpu, &buffers)?;
         let mut tile_rows = gpu.tile_rows(options.width, &layout)?;
         let limit = gpu.limits.max_storage_buffer_binding_size;
@@ -452,7 +454,7 @@ impl<'a> PreparedScene<'a> {
             let columns = self.options.width.div_ceil(WORKGROUP);
             match &self.sampled {
                 None => {
-                    pass.set_pipeline(&self.pipeline);
+                    pass.set_pipeline(self.pipeline.as_ref().expect("a render without sampling has its pixels kernel"));
                     // Packets start at the tile's first row rounded down to a multiple of PACKET.
                     let packets = (first_row % self.packet + rows).div_ceil(self.packet);
                     pass.dispatch_workgroups(columns, packets.div_ceil(WORKGROUP), 1);
