@@ -55,6 +55,22 @@ impl Ray {
 }
 
 impl PrimaryRays {
+    /// The ratio R of the scene's distance from the camera to a pixel's footprint there
+    /// (gpu::precision's contract), for primitives whose points reach at most `farthest`
+    /// (the largest camera-relative coordinate) from the camera. About 2⁻²⁴·R is the
+    /// kernel's rounding error, in pixels, wherever it lands a ray or an edge.
+    pub fn resolution(&self, farthest: f64) -> f64 {
+        let longer_side = f64::from(self.width.max(self.height));
+        if self.orthographic {
+            // The rays start up to size/√2 from the camera; the primitives lie where they lie.
+            let size = self.horizontal.length();
+            farthest.max(size / std::f64::consts::SQRT_2) * longer_side / size
+        } else {
+            // At distance d a pixel spans d·2/(W·D): R = W·D/2 wherever the primitive is.
+            longer_side * self.direction.length() / 2.0
+        }
+    }
+
     /// Resolves `camera` for a `width × height` image. Cannot fail: a [`Camera`] always has
     /// a frame (validated when the scene was read).
     pub fn for_camera(camera: &Camera, width: u32, height: u32) -> PrimaryRays {

@@ -15,7 +15,6 @@
 //! (orthographic) with edge planes computed once per frame ([`EyeTriangle`]).
 
 use super::layout::{BinItem, EyeTriangle, GpuTriangle, PrimitiveKind};
-use super::precision;
 use crate::bvh::Aabb;
 use crate::camera::PrimaryRays;
 use glam::{DVec3, Vec3};
@@ -30,7 +29,7 @@ pub const BIN_COLUMNS: u32 = super::WORKGROUP;
 pub const BIN_ROWS: u32 = super::BIN_PACKET;
 
 /// The kernel's rounding error, in pixels, per unit of the scene's resolution R
-/// ([`precision::resolution`]), padded for the bins. A primary ray's direction (or
+/// ([`PrimaryRays::resolution`]), padded for the bins. A primary ray's direction (or
 /// orthographic origin), a triangle's edge planes and the dot products between them each
 /// round to f32 a few times, about ten units of 2⁻²⁴ in all, so the kernel may take a ray
 /// for inside an edge up to about 10·2⁻²⁴ of the distance beyond it: 10·2⁻²⁴·R pixels on
@@ -107,7 +106,7 @@ impl Bins {
         let start = crate::clock::Instant::now();
         let farthest =
             candidates.iter().map(|c| c.bounds.min.abs().max(c.bounds.max.abs()).max_element()).fold(0.0, f32::max);
-        let rounding = precision::resolution(rays, f64::from(farthest)) * PAD_PER_RESOLUTION;
+        let rounding = rays.resolution(f64::from(farthest)) * PAD_PER_RESOLUTION;
         let projector = Projector::new(rays, reach + rounding);
         let columns = rays.width.div_ceil(BIN_COLUMNS);
         let rows = rays.height.div_ceil(BIN_ROWS);

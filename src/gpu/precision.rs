@@ -162,7 +162,7 @@ pub fn check(scene: &Scene, options: &RenderOptions) -> Result<(), PrecisionErro
         checker.scalar(at, &format!("Material {k} indexOfRefraction"), material.index_of_refraction)?;
     }
     checker.objects(&scene.root, &DMat4::from_translation(-scene.camera.center))?;
-    let resolution = resolution(&rays, checker.farthest.get());
+    let resolution = rays.resolution(checker.farthest.get());
     let triangles = checker.triangles.get();
     if resolution <= if triangles { MAX_RESOLUTION_TRIANGLES } else { MAX_RESOLUTION_SMOOTH } {
         // The camera's resolution first: it is written before any sphere.
@@ -187,22 +187,6 @@ pub fn check(scene: &Scene, options: &RenderOptions) -> Result<(), PrecisionErro
         range: String::new(),
         limit: Limit::Resolution { triangles },
     })
-}
-
-/// The ratio R of the scene's distance from the camera to a pixel's footprint there (see
-/// the module's contract), for primitives whose points reach at most `farthest` (the
-/// largest camera-relative coordinate) from the camera. About 2⁻²⁴·R is the kernel's
-/// rounding error, in pixels, wherever it lands a ray or an edge.
-pub fn resolution(rays: &PrimaryRays, farthest: f64) -> f64 {
-    let longer_side = f64::from(rays.width.max(rays.height));
-    if rays.orthographic {
-        // The rays start up to size/√2 from the camera; the primitives lie where they lie.
-        let size = rays.horizontal.length();
-        farthest.max(size / std::f64::consts::SQRT_2) * longer_side / size
-    } else {
-        // At distance d a pixel spans d·2/(W·D): R = W·D/2 wherever the primitive is.
-        longer_side * rays.direction.length() / 2.0
-    }
 }
 
 struct Checker<'a> {
