@@ -11,14 +11,15 @@ fn eye_triangle_t(tri: EyeTriangle, ray: Ray, tmin: f32) -> f32 {
     if (ORTHOGRAPHIC) {
         q = ray.origin;
     }
-    let e0 = dot(tri.e0.xyz, q) - tri.e0.w;
-    let e1 = dot(tri.e1.xyz, q) - tri.e1.w;
-    let e2 = dot(tri.e2.xyz, q) - tri.e2.w;
+    let e0 = dot(tri.rows[0].xyz, q) - tri.rows[0].w;
+    let e1 = dot(tri.rows[1].xyz, q) - tri.rows[1].w;
+    let e2 = dot(tri.rows[2].xyz, q) - tri.rows[2].w;
     let inside = ((e0 >= 0.0) & (e1 >= 0.0) & (e2 >= 0.0)) | ((e0 <= 0.0) & (e1 <= 0.0) & (e2 <= 0.0));
-    let denominator = dot(tri.plane.xyz, ray.direction);
-    var numerator = tri.plane.w;
+    let plane = tri.rows[3];
+    let denominator = dot(plane.xyz, ray.direction);
+    var numerator = plane.w;
     if (ORTHOGRAPHIC) {
-        numerator -= dot(tri.plane.xyz, ray.origin);
+        numerator -= dot(plane.xyz, ray.origin);
     }
     let t = numerator / select(1.0, denominator, denominator != 0.0);
     return select(NO_HIT, t_if_above(t, tmin), inside & (denominator != 0.0));
@@ -101,13 +102,13 @@ fn walk_bin_packet(column: u32, first_row: u32, last_row: u32, tmin: f32) {
     for (var k = range.x; k < range.x + range.y; k++) {
         let item = bin_items[k];
         let farthest = max(max(packet_hits[0].t, packet_hits[1].t), max(packet_hits[2].t, packet_hits[3].t));
-        if (item.near > farthest) {
+        if (bitcast<f32>(item.words[ITEM_NEAR]) > farthest) {
             break;
         }
-        if (packet_misses(item.pixels, x, y0, y1)) {
+        if (packet_misses(item.words[ITEM_PIXELS], x, y0, y1)) {
             continue;
         }
-        let reference = item.reference;
+        let reference = item.words[ITEM_REFERENCE];
         if (eye_only) {
             let tri = eye_triangles[reference];
             test_eye(0u, tri, reference, tmin);
@@ -120,5 +121,42 @@ fn walk_bin_packet(column: u32, first_row: u32, last_row: u32, tmin: f32) {
         test_ref(1u, reference, shears[1], tmin);
         test_ref(2u, reference, shears[2], tmin);
         test_ref(3u, reference, shears[3], tmin);
+    }
+}
+
+// The walk of main_bins_shared, where the subgroup is exactly one row of a bin's packets
+// (BIN_COLUMNS lanes, lane j in column j: the host chooses it only on such adapters,
+// gpu::GpuRenderer::shares_bin_loads). Every lane walks the same list, and lavapipe loads a
+// storage buffer lane by lane even where the address is the same for all (docs/lavapipe.md):
+// so each lane loads one word of the item and two of its triangle, and broadcasts hand
+// every word to every lane (a register move), 3 loads where `walk_bin_packet` makes 19. The
+// lanes stay in step: the walk stops when every lane's packet is done (subgroupMax), and a
+// lane outside the image walks with the others (`inside` false: it never holds the walk).
+fn walk_bin_shared(column: u32, first_row: u32, lane: u32, inside: bool, tmin: f32) {
+    let range = bin_ranges[bin_of(column, first_row)];
+    for (var k = range.x; k < range.x + range.y; k++) {
+        // Lane 0 loads the reference, the others the near bound.
+        let word = bin_items[k].words[min(lane, ITEM_NEAR)];
+        let near = bitcast<f32>(subgroupBroadcast(word, ITEM_NEAR));
+        var farthest = max(max(packet_hits[0].t, packet_hits[1].t), max(packet_hits[2].t, packet_hits[3].t));
+        if (!inside) {
+            farthest = 0.0;
+        }
+        if (near > subgroupMax(farthest)) {
+            break;
+        }
+        let reference = subgroupBroadcast(word, ITEM_REFERENCE);
+        let low = eye_triangles[reference].rows[lane / 4u][lane % 4u];
+        let high = eye_triangles[reference].rows[2u + lane / 4u][lane % 4u];
+        let tri = EyeTriangle(array<vec4<f32>, 4>(
+            vec4<f32>(subgroupBroadcast(low, 0u), subgroupBroadcast(low, 1u), subgroupBroadcast(low, 2u), subgroupBroadcast(low, 3u)),
+            vec4<f32>(subgroupBroadcast(low, 4u), subgroupBroadcast(low, 5u), subgroupBroadcast(low, 6u), subgroupBroadcast(low, 7u)),
+            vec4<f32>(subgroupBroadcast(high, 0u), subgroupBroadcast(high, 1u), subgroupBroadcast(high, 2u), subgroupBroadcast(high, 3u)),
+            vec4<f32>(subgroupBroadcast(high, 4u), subgroupBroadcast(high, 5u), subgroupBroadcast(high, 6u), subgroupBroadcast(high, 7u)),
+        ));
+        test_eye(0u, tri, reference, tmin);
+        test_eye(1u, tri, reference, tmin);
+        test_eye(2u, tri, reference, tmin);
+        test_eye(3u, tri, reference, tmin);
     }
 }

@@ -1,6 +1,6 @@
 // The entry points. `main` renders one pixel per invocation; `main_bins` a packet of
 // PACKET pixels stacked in a column, so that every primitive loaded from a bin is tested
-// against PACKET rays. Without bins an invocation stays at one pixel: lavapipe stops an
+// against PACKET rays; `main_bins_shared` the same, its subgroup's lanes sharing the loads. Without bins an invocation stays at one pixel: lavapipe stops an
 // invocation's loops after 65535 iterations in all (docs/lavapipe.md), which PACKET flat
 // walks over many primitives would reach. Two entry points, not an override: wgpu compiles
 // only what the chosen one reaches, and lavapipe would otherwise compile the other's code
@@ -69,6 +69,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let ray = ray_of_row(i, P.first_row + row);
+    load_shading_data();
     var shaded: Shaded;
     if (VOXELS) {
         shaded = voxel_pixel(ray);
@@ -118,6 +119,13 @@ fn main_bins(@builtin(global_invocation_id) id: vec3<u32>) {
     start_row(2u, i, base, first, tmin);
     start_row(3u, i, base, first, tmin);
     walk_bin_packet(i, base, base + PACKET - 1u, tmin);
+    finish_packet(i, first, stats_slot(id));
+}
+
+// The packet of column i, tile-relative rows first … first + 3, shaded (after the lights
+// are loaded once for them all) and written; its counts added into `slot`.
+fn finish_packet(i: u32, first: i32, slot: u32) {
+    load_shading_data();
     let s0 = shade_pixel(packet_rays[0], packet_hits[0]);
     let s1 = shade_pixel(packet_rays[1], packet_hits[1]);
     let s2 = shade_pixel(packet_rays[2], packet_hits[2]);
@@ -131,6 +139,43 @@ fn main_bins(@builtin(global_invocation_id) id: vec3<u32>) {
     write_row(i, first + 2, s2, cut);
     write_row(i, first + 3, s3, cut);
     if (!cut) {
-        flush_counts(stats_slot(id));
+        flush_counts(slot);
     }
+}
+
+// As main_bins, on adapters whose subgroups are exactly BIN_COLUMNS lanes (lavapipe): the
+// subgroup is one row of a bin's packets, lane j in column j (so the pixels are chosen from
+// the subgroup's own numbering, whatever order the driver gives its invocations), and the
+// lanes share each item's loads (walk_bin_shared). Triangles only, with the watertight
+// test: the host chooses it only then (gpu::KernelConfig::entry_point). The workgroups are
+// main_bins' (WORKGROUP columns by WORKGROUP packet rows, dispatched alike) laid out in one
+// dimension, which subgroup builtins require.
+const_assert WORKGROUP == BIN_COLUMNS;
+@compute @workgroup_size(WORKGROUP * WORKGROUP)
+fn main_bins_shared(
+    @builtin(workgroup_id) group: vec3<u32>,
+    @builtin(subgroup_id) subgroup: u32,
+    @builtin(subgroup_invocation_id) lane: u32,
+) {
+    P = params;
+    let i = group.x * BIN_COLUMNS + lane;
+    let packet_row = group.y * WORKGROUP + subgroup;
+    let base = P.first_row - P.first_row % PACKET + packet_row * PACKET;
+    let first = i32(base) - i32(P.first_row);
+    // The whole subgroup or none of it: its lanes share a packet row.
+    if (first >= i32(P.tile_rows)) {
+        return;
+    }
+    // A lane beyond the image's last column walks with the others and writes nothing.
+    let inside = i < P.width;
+    let tmin = t_min();
+    start_row(0u, i, base, first, tmin);
+    start_row(1u, i, base, first, tmin);
+    start_row(2u, i, base, first, tmin);
+    start_row(3u, i, base, first, tmin);
+    walk_bin_shared(i, base, lane, inside, tmin);
+    if (!inside) {
+        return;
+    }
+    finish_packet(i, first, stats_slot(vec3<u32>(i, packet_row, 0u)));
 }

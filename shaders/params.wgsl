@@ -30,6 +30,8 @@ override PACKED_8BIT: bool = false;
 // A loop bound fixed at compile time: no light code for a scene without lights, and the
 // loop unrolled for the rest.
 override NUM_LIGHTS: u32 = 0u;
+// The scene has one material: loaded once per invocation, not at every hit (shading.wgsl).
+override ONE_MATERIAL: bool = false;
 override SHADE_BACK: bool = false;
 // The course's assignments 3 and 4 (docs/SPEC.md §5), each compiled in only where a scene or
 // a flag uses it, so that a scene using none of them gets assignment 2's kernel: some
@@ -157,25 +159,25 @@ struct Triangle {
     normal_v: f32,
 }
 
-// A triangle for primary rays (gpu::binning::EyeTriangle): three edge planes n · q − w, with
-// q the ray's direction (perspective, all rays from the eye at the origin) or its origin
-// (orthographic, all rays along one direction), and the triangle's plane n · p = w.
+// A triangle for primary rays (gpu::binning::EyeTriangle): rows 0 … 2 are three edge planes
+// n · q − w, with q the ray's direction (perspective, all rays from the eye at the origin)
+// or its origin (orthographic, all rays along one direction), row 3 the triangle's plane
+// n · p = w. An array, so that each lane of main_bins_shared can load one of its 16 words.
 struct EyeTriangle {
-    e0: vec4<f32>,
-    e1: vec4<f32>,
-    e2: vec4<f32>,
-    plane: vec4<f32>,
+    rows: array<vec4<f32>, 4>,
 }
 
-// A primitive listed in a bin (a reference, as prim_refs) and a lower bound of the t at
-// which a primary ray can meet it; a bin's items are sorted by it.
+// A primitive listed in a bin, three words (gpu::binning::BinItem): its reference (as
+// prim_refs); a lower bound of the t at which a primary ray can meet it, as f32 bits (a
+// bin's items are sorted by it); and the bin's pixels whose rays may meet it: col0, row0,
+// col1, row1 (inclusive, from the bin's corner), a byte each from the lowest
+// (gpu::binning::Bins::band). Words, so that each lane of main_bins_shared can load one.
 struct BinItem {
-    reference: u32,
-    near: f32,
-    // The bin's pixels whose rays may meet it: col0, row0, col1, row1 (inclusive, from the
-    // bin's corner), a byte each from the lowest (gpu::binning::Bins::band).
-    pixels: u32,
+    words: array<u32, 3>,
 }
+const ITEM_REFERENCE: u32 = 0u;
+const ITEM_NEAR: u32 = 1u;
+const ITEM_PIXELS: u32 = 2u;
 
 // The course's PhongMaterial (scene::Material). A vec3 and a scalar share each 16 bytes,
 // so the host's twin (gpu::layout::GpuMaterial) needs no hidden padding.

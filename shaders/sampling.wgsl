@@ -83,6 +83,7 @@ fn main_samples(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let j = P.height - 1u - (sampling.first_row + r);
     let ray = primary_ray_at(i, j, sample_position(i, j, k));
+    load_shading_data();
     // -visualize_grid's picture (grid.wgsl's voxels), sample by sample, as `main` draws it.
     var shaded: Shaded;
     if (VOXELS) {
@@ -120,6 +121,7 @@ fn main_samples_bins(@builtin(global_invocation_id) id: vec3<u32>) {
     let at2 = start_sample(2u, i, base, first, per_row, rows, tmin);
     let at3 = start_sample(3u, i, base, first, per_row, rows, tmin);
     walk_bin_packet(i, base, base + rows - 1u, tmin);
+    load_shading_data();
     let s0 = shade_pixel(packet_rays[0], packet_hits[0]);
     let s1 = shade_pixel(packet_rays[1], packet_hits[1]);
     let s2 = shade_pixel(packet_rays[2], packet_hits[2]);

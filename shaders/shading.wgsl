@@ -85,14 +85,49 @@ fn shade(surface: Surface, ray: Ray) -> vec3<f32> {
     if (TEXTURES && textures[surface.material].kind != 0u) {
         return shade_blend(surface, n, ray);
     }
-    return shade_phong(materials[surface.material], surface, n, ray);
+    return shade_phong(material_at(surface.material), surface, n, ray);
+}
+
+// The scene's lights where they are at most LIGHT_CACHE, and its material where it has one,
+// loaded once per invocation (load_shading_data): an invocation of main_bins shades PACKET
+// pixels, a ray tree many surfaces, and each would load them again, lane by lane on
+// lavapipe even though every lane reads the same address (docs/lavapipe.md). Otherwise
+// each use loads its own.
+const LIGHT_CACHE: u32 = 4u;
+var<private> cached_lights: array<Light, LIGHT_CACHE>;
+var<private> only_material: Material;
+
+// Called by the entry points before they shade.
+fn load_shading_data() {
+    if (NUM_LIGHTS <= LIGHT_CACHE) {
+        for (var k = 0u; k < NUM_LIGHTS; k++) {
+            cached_lights[k] = lights[k];
+        }
+    }
+    if (ONE_MATERIAL) {
+        only_material = materials[0];
+    }
+}
+
+fn light_at(k: u32) -> Light {
+    if (NUM_LIGHTS <= LIGHT_CACHE) {
+        return cached_lights[k];
+    }
+    return lights[k];
+}
+
+fn material_at(m: u32) -> Material {
+    if (ONE_MATERIAL) {
+        return only_material;
+    }
+    return materials[m];
 }
 
 // One Phong material's colour at the surface, n facing the viewer.
 fn shade_phong(material: Material, surface: Surface, n: vec3<f32>, ray: Ray) -> vec3<f32> {
     var color = P.ambient * material.diffuse;
     for (var k = 0u; k < NUM_LIGHTS; k++) {
-        let light = lights[k];
+        let light = light_at(k);
         let arriving = incoming(light, surface.point);
         // A light behind the surface adds nothing, so it needs no shadow ray.
         if (SHADOWS && dot(arriving.to_light, n) > 0.0 && in_shadow(surface, n, light, arriving)) {
@@ -162,7 +197,7 @@ fn shade_blend(surface: Surface, n: vec3<f32>, ray: Ray) -> vec3<f32> {
         if (leaf.material == NO_LEAF) {
             break;
         }
-        color += leaf.share * shade_phong(materials[leaf.material], surface, n, ray);
+        color += leaf.share * shade_phong(material_at(leaf.material), surface, n, ray);
     }
     return color;
 }

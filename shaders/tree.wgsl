@@ -82,11 +82,11 @@ fn push_children(surface: Surface, node: Pending) {
             if (leaf.material == NO_LEAF) {
                 break;
             }
-            push_material_children(surface, node, materials[leaf.material], leaf.share);
+            push_material_children(surface, node, material_at(leaf.material), leaf.share);
         }
         return;
     }
-    push_material_children(surface, node, materials[surface.material], 1.0);
+    push_material_children(surface, node, material_at(surface.material), 1.0);
 }
 
 // The rays one Phong material spawns where `node.ray` hit. Objects sit in vacuum

@@ -43,7 +43,9 @@ fn check(module: &naga::Module, name: &str, rust_size: usize, rust_offsets: &[(&
 #[test]
 fn shader_parses_and_validates() {
     let module = module();
-    naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::default())
+    // Subgroups for main_bins_shared alone (gpu::specialise checks that the others need none).
+    let capabilities = naga::valid::Capabilities::default() | naga::valid::Capabilities::SUBGROUP;
+    naga::valid::Validator::new(naga::valid::ValidationFlags::all(), capabilities)
         .validate(&module)
         .unwrap_or_else(|e| panic!("{}", e.emit_to_string(shader::source())));
 }
@@ -166,27 +168,18 @@ fn host_structs_match_the_shader() {
             ("attenuation", offset_of!(GpuLight, attenuation)),
         ],
     );
-    check(
-        &m,
-        "EyeTriangle",
-        size_of::<EyeTriangle>(),
-        &[
-            ("e0", offset_of!(EyeTriangle, edges)),
-            ("e1", offset_of!(EyeTriangle, edges) + 16),
-            ("e2", offset_of!(EyeTriangle, edges) + 32),
-            ("plane", offset_of!(EyeTriangle, plane)),
-        ],
-    );
-    check(
-        &m,
-        "BinItem",
-        size_of::<BinItem>(),
-        &[
-            ("reference", offset_of!(BinItem, reference)),
-            ("near", offset_of!(BinItem, near)),
-            ("pixels", offset_of!(BinItem, pixels)),
-        ],
-    );
+    check(&m, "EyeTriangle", size_of::<EyeTriangle>(), &[("rows", offset_of!(EyeTriangle, edges))]);
+    // The shader's rows 0 … 2 are the host's edges, row 3 its plane.
+    assert_eq!(offset_of!(EyeTriangle, plane), offset_of!(EyeTriangle, edges) + 3 * 16);
+    check(&m, "BinItem", size_of::<BinItem>(), &[("words", 0)]);
+    // The shader names the host's fields by their word.
+    for (name, offset) in [
+        ("ITEM_REFERENCE", offset_of!(BinItem, reference)),
+        ("ITEM_NEAR", offset_of!(BinItem, near)),
+        ("ITEM_PIXELS", offset_of!(BinItem, pixels)),
+    ] {
+        assert_eq!(shader_constant(&m, name), naga::Literal::U32(offset as u32 / 4), "{name}");
+    }
     check(
         &m,
         "Sampling",
@@ -266,6 +259,7 @@ fn override_constants_match_the_host() {
         orthographic: false,
         pixel_layout: PixelLayout { outputs: Outputs::ALL, packed: false },
         num_lights: 1,
+        one_material: false,
         shade_back: false,
         specular: true,
         specular_fix: true,
@@ -277,6 +271,7 @@ fn override_constants_match_the_host() {
         sphere_test: SphereTest::Robust,
         use_bvh: false,
         use_bins: false,
+        shared_bin_loads: false,
         use_grid: false,
         textures: true,
         stats: true,
@@ -359,10 +354,12 @@ fn sizes_match_the_host() {
     assert_eq!(shader_constant(&m, "BIN_ROWS"), naga::Literal::U32(raycaster::gpu::binning::BIN_ROWS));
     assert_eq!(shader_constant(&m, "WORKGROUP"), naga::Literal::U32(raycaster::gpu::WORKGROUP));
     let names: Vec<&str> = m.entry_points.iter().map(|e| e.name.as_str()).collect();
-    assert_eq!(names, ["main", "main_bins", "main_samples", "main_samples_bins", "main_filter"]);
+    assert_eq!(names, ["main", "main_bins", "main_bins_shared", "main_samples", "main_samples_bins", "main_filter"]);
     for entry in &m.entry_points {
         let w = raycaster::gpu::WORKGROUP;
-        assert_eq!(entry.workgroup_size, [w, w, 1], "{}", entry.name);
+        // main_bins_shared's workgroups are main_bins' in one dimension (subgroup builtins).
+        let size = if entry.name == "main_bins_shared" { [w * w, 1, 1] } else { [w, w, 1] };
+        assert_eq!(entry.workgroup_size, size, "{}", entry.name);
     }
 }
 
@@ -394,4 +391,54 @@ fn stats_counters_sum_high_and_low_words_over_the_slots() {
     assert_eq!(counted.intersections, (4 << 32) + 4);
     assert_eq!(counted.cells_traversed, 7);
     assert_eq!((counted.non_shadow_rays, counted.shadow_rays), (0, 0));
+}
+
+/// Every entry point that reads a light or a material through the per-invocation copies
+/// (`light_at`, `material_at`, shaders/shading.wgsl) loads them (`load_shading_data`): one
+/// that forgot would shade with lights and materials of zero, silently.
+#[test]
+fn entry_points_that_shade_load_the_shading_data() {
+    let m = module();
+    let name_of = |h: naga::Handle<naga::Function>| m.functions[h].name.clone().unwrap_or_default();
+    let reaches = |start: &naga::Block, name: &str| {
+        let mut seen = std::collections::HashSet::new();
+        let mut todo = calls(start);
+        while let Some(f) = todo.pop() {
+            if seen.insert(f) {
+                todo.extend(calls(&m.functions[f].body));
+            }
+        }
+        seen.iter().any(|&f| name_of(f) == name)
+    };
+    let mut shading = 0;
+    for entry in &m.entry_points {
+        if reaches(&entry.function.body, "light_at") || reaches(&entry.function.body, "material_at") {
+            shading += 1;
+            assert!(reaches(&entry.function.body, "load_shading_data"), "{} shades without load_shading_data", entry.name);
+        }
+    }
+    // main, main_bins, main_bins_shared, main_samples, main_samples_bins.
+    assert_eq!(shading, 5);
+}
+
+/// The functions a block calls, in its nested blocks too.
+fn calls(block: &naga::Block) -> Vec<naga::Handle<naga::Function>> {
+    let mut out = Vec::new();
+    for statement in block.iter() {
+        match statement {
+            naga::Statement::Call { function, .. } => out.push(*function),
+            naga::Statement::Block(b) => out.extend(calls(b)),
+            naga::Statement::If { accept, reject, .. } => {
+                out.extend(calls(accept));
+                out.extend(calls(reject));
+            }
+            naga::Statement::Loop { body, continuing, .. } => {
+                out.extend(calls(body));
+                out.extend(calls(continuing));
+            }
+            naga::Statement::Switch { cases, .. } => cases.iter().for_each(|c| out.extend(calls(&c.body))),
+            _ => {}
+        }
+    }
+    out
 }

@@ -60,6 +60,10 @@ pub struct GpuOptions {
     pub bvh_min_primitives: usize,
     /// How rays find their candidates.
     pub acceleration: Acceleration,
+    /// Let the lanes of a bin's row share its loads (`main_bins_shared`) where the device
+    /// allows it ([`GpuRenderer::shares_bin_loads`]); false keeps one load per lane
+    /// (`main_bins`), as on every other adapter, for tests to compare the two.
+    pub shared_bin_loads: bool,
 }
 
 impl Default for GpuOptions {
@@ -68,6 +72,7 @@ impl Default for GpuOptions {
             max_tile_bytes: MAX_TILE_BYTES,
             bvh_min_primitives: flatten::BVH_MIN_PRIMITIVES,
             acceleration: Acceleration::Auto,
+            shared_bin_loads: true,
         }
     }
 }
@@ -136,6 +141,8 @@ pub struct KernelConfig {
     pub orthographic: bool,
     pub pixel_layout: PixelLayout,
     pub num_lights: u32,
+    /// The scene has one material (loaded once per invocation).
+    pub one_material: bool,
     pub shade_back: bool,
     /// Some material has a specular colour.
     pub specular: bool,
@@ -152,6 +159,8 @@ pub struct KernelConfig {
     pub sphere_test: SphereTest,
     pub use_bvh: bool,
     pub use_bins: bool,
+    /// With bins, the subgroup's lanes share each item's loads (`main_bins_shared`).
+    pub shared_bin_loads: bool,
     pub use_grid: bool,
     /// Some material is a solid texture (`shaders/texture.wgsl`).
     pub textures: bool,
@@ -179,13 +188,15 @@ pub enum Stage {
 
 impl KernelConfig {
     /// The kernel for `buffers`, flattened from a scene whose ray tree is `tree`, on a
-    /// driver with (`loop_limit`) or without a loop limit.
+    /// driver with (`loop_limit`) or without a loop limit, whose subgroups can share a bin's
+    /// loads (`shared_loads`, [`GpuRenderer::shares_bin_loads`]) or not.
     pub fn new(
         buffers: &SceneBuffers,
         pixel_layout: PixelLayout,
         options: &RenderOptions,
         tree: &tree::TreeShape,
         loop_limit: bool,
+        shared_loads: bool,
     ) -> KernelConfig {
         let shading = &options.shading;
         let specular = buffers.materials.iter().any(|m| m.specular != [0.0; 3]);
@@ -197,6 +208,7 @@ impl KernelConfig {
             orthographic: buffers.orthographic,
             pixel_layout,
             num_lights: buffers.lights.len() as u32,
+            one_material: buffers.materials.len() == 1,
             shade_back: shading.shade_back,
             specular,
             specular_fix: specular && shading.specular_fix,
@@ -208,6 +220,7 @@ impl KernelConfig {
             sphere_test: options.sphere_test,
             use_bvh: buffers.bvh.is_some(),
             use_bins: buffers.bins.is_some(),
+            shared_bin_loads: false,
             use_grid: buffers.grid.is_some(),
             textures: !buffers.textures.is_empty(),
             stats: options.stats,
@@ -217,6 +230,10 @@ impl KernelConfig {
         // Every pixel, whatever it casts: a hierarchy that cannot cull (slivers across the
         // view), a crowded bin, a flat loop or a texture's blend passes the limit.
         config.loop_canary = loop_limit;
+        // The shared walk tests triangles alone, with the watertight test's primary-ray form.
+        let eye_only =
+            !config.has_spheres && !config.has_ellipsoids && config.triangle_test == TriangleTest::Watertight;
+        config.shared_bin_loads = shared_loads && config.use_bins && eye_only;
         config
     }
 
@@ -230,7 +247,8 @@ impl KernelConfig {
         }
     }
 
-    /// The kernel's entry point: `main_bins` renders packets from bins, `main` one pixel.
+    /// The kernel's entry point: `main_bins` renders packets from bins (`main_bins_shared`
+    /// sharing their loads), `main` one pixel.
     pub fn entry_point(&self) -> &'static str {
         match self.stage {
             Stage::Samples if self.use_bins => return "main_samples_bins",
@@ -238,10 +256,10 @@ impl KernelConfig {
             Stage::Filter => return "main_filter",
             Stage::Pixels => {}
         }
-        if self.use_bins {
-            "main_bins"
-        } else {
-            "main"
+        match (self.use_bins, self.shared_bin_loads) {
+            (true, true) => "main_bins_shared",
+            (true, false) => "main_bins",
+            (false, _) => "main",
         }
     }
 
@@ -251,7 +269,7 @@ impl KernelConfig {
     }
 
     /// The values for `PipelineCompilationOptions::constants`.
-    pub fn constants(&self) -> [(&'static str, f64); 26] {
+    pub fn constants(&self) -> [(&'static str, f64); 27] {
         let b = |v: bool| if v { 1.0 } else { 0.0 };
         [
             ("HAS_SPHERES", b(self.has_spheres)),
@@ -265,6 +283,7 @@ impl KernelConfig {
             ("PIXEL_WORDS", self.pixel_layout.words() as f64),
             ("PACKED_8BIT", b(self.pixel_layout.packed)),
             ("NUM_LIGHTS", self.num_lights as f64),
+            ("ONE_MATERIAL", b(self.one_material)),
             ("SHADE_BACK", b(self.shade_back)),
             ("SPECULAR", b(self.specular)),
             ("SPECULAR_FIX", b(self.specular_fix)),
@@ -431,7 +450,9 @@ impl GpuRenderer {
         // The defaults are below what lavapipe and real GPUs offer (docs/lavapipe.md); ask for all.
         let limits = adapter.limits();
         // Kernel time from the GPU's own clock where the adapter offers it (lavapipe does).
-        let features = adapter.features() & wgpu::Features::TIMESTAMP_QUERY;
+        // Subgroups where offered: on lavapipe a bin's lanes share their loads with them
+        // (GpuRenderer::shares_bin_loads).
+        let features = adapter.features() & (wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::SUBGROUP);
         let (device, queue) = adapter
             .request_device(&wgpu::DeviceDescriptor {
                 label: Some("raycaster"),
@@ -546,6 +567,19 @@ impl GpuRenderer {
         let info = &self.adapter_info;
         let lavapipe = info.driver.contains("llvmpipe") || info.name.contains("llvmpipe");
         lavapipe.then_some(flatten::LOOP_LIMIT)
+    }
+
+    /// Whether the lanes of a bin's row can share their loads (`main_bins_shared`): the
+    /// device was opened with subgroups, every subgroup has exactly
+    /// [`binning::BIN_COLUMNS`] lanes (lavapipe's 8, one row of a bin's packets), and the
+    /// options allow it. Where a GPU loads one address for a whole subgroup at once, as real
+    /// GPUs do, the subgroups are wider and `main_bins` runs.
+    pub fn shares_bin_loads(&self) -> bool {
+        let info = &self.adapter_info;
+        self.options.shared_bin_loads
+            && self.device.features().contains(wgpu::Features::SUBGROUP)
+            && info.subgroup_min_size == binning::BIN_COLUMNS
+            && info.subgroup_max_size == binning::BIN_COLUMNS
     }
 
     /// The bindings the kernels `stages` of a scene in `file` use: all of them, or where

@@ -130,7 +130,8 @@ impl<'a> PreparedScene<'a> {
                 super::flatten::LOOP_LIMIT / 2
             )));
         }
-        let config = KernelConfig::new(&buffers, layout, options, &tree, gpu.loop_limit().is_some());
+        let config =
+            KernelConfig::new(&buffers, layout, options, &tree, gpu.loop_limit().is_some(), gpu.shares_bin_loads());
         let stages = match options.sampling {
             None => vec![config],
             Some(_) => {

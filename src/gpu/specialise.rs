@@ -363,4 +363,24 @@ mod tests {
         assert!(has(&specialise(module, &with("USE_GRID"), "main"), "grid_closest"));
         assert!(function_names(&plain).len() * 3 < function_names(module).len(), "{:?}", function_names(&plain));
     }
+
+    /// Only `main_bins_shared` uses subgroups: every other kernel, cut down, validates
+    /// without them, so devices that offer none (or browsers) still run it.
+    #[test]
+    fn only_the_shared_walk_needs_subgroups() {
+        let module = super::super::shader::module();
+        let constants: Vec<(&str, f64)> = module
+            .overrides
+            .iter()
+            .filter_map(|(_, o)| o.name.as_deref())
+            .map(|name| (name, if name == "USE_BINS" || name == "HAS_TRIANGLES" { 1.0 } else { 0.0 }))
+            .collect();
+        let without =
+            || naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::default());
+        for entry in &module.entry_points {
+            let cut = specialise(module, &constants, &entry.name);
+            let valid = without().validate(&cut);
+            assert_eq!(valid.is_ok(), entry.name != "main_bins_shared", "{}: {:?}", entry.name, valid.err());
+        }
+    }
 }

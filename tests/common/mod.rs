@@ -88,6 +88,21 @@ pub fn gpu_with(acceleration: raycaster::gpu::Acceleration) -> Option<GpuRendere
         .map(|g| g.on_same_device(raycaster::gpu::GpuOptions { acceleration, ..raycaster::gpu::GpuOptions::default() }))
 }
 
+/// The GPU renderer on the same device with bins, each lane loading its own items
+/// (`main_bins`, as on real GPUs) even where the lanes of a bin could share them
+/// (`main_bins_shared`, lavapipe): the tests cover both walks on one machine.
+#[allow(dead_code)]
+pub fn gpu_with_own_bin_loads() -> GpuRenderer {
+    let options = raycaster::gpu::GpuOptions {
+        acceleration: raycaster::gpu::Acceleration::Bins,
+        shared_bin_loads: false,
+        ..raycaster::gpu::GpuOptions::default()
+    };
+    let own = gpu().expect("a GPU adapter").on_same_device(options);
+    assert!(!own.shares_bin_loads());
+    own
+}
+
 /// Every way the kernel can find candidates, `auto` first, so that a test over all of them
 /// covers the bins and the hierarchy whatever the cost model picks at the test's sizes.
 pub const ACCELERATIONS: [raycaster::gpu::Acceleration; 3] =
