@@ -508,6 +508,7 @@ fn an_interrupted_render_leaves_nothing_behind() {
             } else {
                 command.args(line.split(' ')).args(["--backend", "cpu"]);
             }
+            with_default_signals(&mut command);
             let child = command.current_dir(out.path()).stderr(std::process::Stdio::piped()).spawn().unwrap();
             wait_for_temporary_files(&child, out.path(), 2);
             // SAFETY: kill(2) on our own child's pid, which cannot have been reused: the child
@@ -520,6 +521,25 @@ fn an_interrupted_render_leaves_nothing_behind() {
             let left = file_names(out.path());
             assert!(left.is_empty(), "{what}: left behind {left:?}");
         }
+    }
+}
+
+/// Gives the child the default actions for SIGINT and SIGTERM, whatever the test process
+/// inherited: a child started with SIGINT ignored keeps it ignored, as `nohup` expects
+/// (src/app/signals/unix.rs). One run of the suite, launched from a background job of a
+/// non-interactive shell (which ignores SIGINT), saw the render run to its end and exit 0;
+/// the same test run alone, even under `trap '' INT`, passed.
+#[cfg(unix)]
+fn with_default_signals(command: &mut Command) {
+    use std::os::unix::process::CommandExt;
+    // SAFETY: the closure runs in the forked child before exec and calls only signal(2),
+    // which is async-signal-safe.
+    unsafe {
+        command.pre_exec(|| {
+            libc::signal(libc::SIGINT, libc::SIG_DFL);
+            libc::signal(libc::SIGTERM, libc::SIG_DFL);
+            Ok(())
+        });
     }
 }
 

@@ -414,7 +414,11 @@ fn entry_points_that_shade_load_the_shading_data() {
     for entry in &m.entry_points {
         if reaches(&entry.function.body, "light_at") || reaches(&entry.function.body, "material_at") {
             shading += 1;
-            assert!(reaches(&entry.function.body, "load_shading_data"), "{} shades without load_shading_data", entry.name);
+            assert!(
+                reaches(&entry.function.body, "load_shading_data"),
+                "{} shades without load_shading_data",
+                entry.name
+            );
         }
     }
     // main, main_bins, main_bins_shared, main_samples, main_samples_bins.
