@@ -1,10 +1,11 @@
 // The entry points. `main` renders one pixel per invocation; `main_bins` a packet of
 // PACKET pixels stacked in a column, so that every primitive loaded from a bin is tested
-// against PACKET rays; `main_bins_shared` the same, its subgroup's lanes sharing the loads. Without bins an invocation stays at one pixel: lavapipe stops an
-// invocation's loops after 65535 iterations in all (docs/lavapipe.md), which PACKET flat
-// walks over many primitives would reach. Two entry points, not an override: wgpu compiles
-// only what the chosen one reaches, and lavapipe would otherwise compile the other's code
-// before dropping it. (The host's gpu::KernelConfig::packet and entry_point.)
+// against PACKET rays; `main_bins_shared` the same, its subgroup's lanes sharing the
+// loads. Without bins an invocation stays at one pixel: lavapipe stops an invocation's
+// loops after 65535 iterations in all (docs/lavapipe.md), which PACKET flat walks over many
+// primitives would reach. Separate entry points, not an override: wgpu compiles only what
+// the chosen one reaches, and lavapipe would otherwise compile the others' code before
+// dropping it. (The host's gpu::KernelConfig::packet and entry_point.)
 
 // Whether the driver's loop limit was reached (docs/lavapipe.md): lavapipe counts the
 // iterations of all of an invocation's loops together and, past its limit, lets each loop
@@ -119,12 +120,13 @@ fn main_bins(@builtin(global_invocation_id) id: vec3<u32>) {
     start_row(2u, i, base, first, tmin);
     start_row(3u, i, base, first, tmin);
     walk_bin_packet(i, base, base + PACKET - 1u, tmin);
-    finish_packet(i, first, stats_slot(id));
+    finish_packet(i, first, stats_slot(id), false);
 }
 
 // The packet of column i, tile-relative rows first … first + 3, shaded (after the lights
-// are loaded once for them all) and written; its counts added into `slot`.
-fn finish_packet(i: u32, first: i32, slot: u32) {
+// are loaded once for them all) and written, or handed over to the host's reference where
+// the driver cut its loops short or `untrusted`; its counts added into `slot`.
+fn finish_packet(i: u32, first: i32, slot: u32, untrusted: bool) {
     load_shading_data();
     let s0 = shade_pixel(packet_rays[0], packet_hits[0]);
     let s1 = shade_pixel(packet_rays[1], packet_hits[1]);
@@ -133,7 +135,7 @@ fn finish_packet(i: u32, first: i32, slot: u32) {
     // One canary for the invocation, after all of its loops: past the limit only the first
     // canary runs short, a second one runs in full (tests/loop_limit.rs found the packet's
     // last three rows wrong and unmarked with one canary per row).
-    let cut = LOOP_CANARY && loops_were_cut();
+    let cut = (LOOP_CANARY && loops_were_cut()) || untrusted;
     write_row(i, first, s0, cut);
     write_row(i, first + 1, s1, cut);
     write_row(i, first + 2, s2, cut);
@@ -156,6 +158,7 @@ fn main_bins_shared(
     @builtin(workgroup_id) group: vec3<u32>,
     @builtin(subgroup_id) subgroup: u32,
     @builtin(subgroup_invocation_id) lane: u32,
+    @builtin(subgroup_size) lanes: u32,
 ) {
     P = params;
     let i = group.x * BIN_COLUMNS + lane;
@@ -177,5 +180,7 @@ fn main_bins_shared(
     if (!inside) {
         return;
     }
-    finish_packet(i, first, stats_slot(vec3<u32>(i, packet_row, 0u)));
+    // The host chose this kernel for subgroups of BIN_COLUMNS lanes; should the driver
+    // run others, the lanes did not walk one bin together: the reference renders the pixels.
+    finish_packet(i, first, stats_slot(vec3<u32>(i, packet_row, 0u)), lanes != BIN_COLUMNS);
 }
