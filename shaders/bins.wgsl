@@ -66,12 +66,6 @@ fn packet_misses(pixels: u32, x: u32, y0: u32, y1: u32) -> bool {
     return x < c0 || x > c1 || y1 < r0 || y0 > r1;
 }
 
-// The closest hits of the packet (pixels of column `column`, image rows `first_row` …
-// `last_row`, all in one bin) among the primitives listed in its bin, nearest first. Each
-// item is loaded once and tested against the PACKET rays (on lavapipe a load costs a gather
-// per lane group even when every lane reads one address: docs/lavapipe.md), unless none of
-// the packet's pixels is in its rectangle; the walk stops once every ray's closest hit is
-// nearer than the next item can be.
 // Row r of the packet against a triangle from the bins (the watertight test's primary-ray
 // form), or against any primitive by reference.
 fn test_eye(r: u32, tri: EyeTriangle, reference: u32, tmin: f32) {
@@ -83,6 +77,17 @@ fn test_ref(r: u32, reference: u32, shear: Shear, tmin: f32) {
     packet_hits[r] = try_ref(reference, packet_rays[r], shear, tmin, packet_hits[r], true);
 }
 
+// The farthest of the packet's closest hits so far: no item nearer than it can change one.
+fn packet_farthest() -> f32 {
+    return max(max(packet_hits[0].t, packet_hits[1].t), max(packet_hits[2].t, packet_hits[3].t));
+}
+
+// The closest hits of the packet (pixels of column `column`, image rows `first_row` …
+// `last_row`, all in one bin) among the primitives listed in its bin, nearest first. Each
+// item is loaded once and tested against the PACKET rays (on lavapipe a load costs a gather
+// per lane group even when every lane reads one address: docs/lavapipe.md), unless none of
+// the packet's pixels is in its rectangle; the walk stops once every ray's closest hit is
+// nearer than the next item can be.
 fn walk_bin_packet(column: u32, first_row: u32, last_row: u32, tmin: f32) {
     let range = bin_ranges[bin_of(column, first_row)];
     let x = column % BIN_COLUMNS;
@@ -101,8 +106,7 @@ fn walk_bin_packet(column: u32, first_row: u32, last_row: u32, tmin: f32) {
     }
     for (var k = range.x; k < range.x + range.y; k++) {
         let item = bin_items[k];
-        let farthest = max(max(packet_hits[0].t, packet_hits[1].t), max(packet_hits[2].t, packet_hits[3].t));
-        if (bitcast<f32>(item.words[ITEM_NEAR]) > farthest) {
+        if (bitcast<f32>(item.words[ITEM_NEAR]) > packet_farthest()) {
             break;
         }
         if (packet_misses(item.words[ITEM_PIXELS], x, y0, y1)) {
@@ -138,10 +142,7 @@ fn walk_bin_shared(column: u32, first_row: u32, lane: u32, inside: bool, tmin: f
         // Lane 0 loads the reference, the others the near bound.
         let word = bin_items[k].words[min(lane, ITEM_NEAR)];
         let near = bitcast<f32>(subgroupBroadcast(word, ITEM_NEAR));
-        var farthest = max(max(packet_hits[0].t, packet_hits[1].t), max(packet_hits[2].t, packet_hits[3].t));
-        if (!inside) {
-            farthest = 0.0;
-        }
+        let farthest = select(0.0, packet_farthest(), inside);
         if (near > subgroupMax(farthest)) {
             break;
         }

@@ -91,7 +91,6 @@ pub fn gpu_with(acceleration: raycaster::gpu::Acceleration) -> Option<GpuRendere
 /// The GPU renderer on the same device with bins, each lane loading its own items
 /// (`main_bins`, as on real GPUs) even where the lanes of a bin could share them
 /// (`main_bins_shared`, lavapipe): the tests cover both walks on one machine.
-#[allow(dead_code)]
 pub fn gpu_with_own_bin_loads() -> GpuRenderer {
     let options = raycaster::gpu::GpuOptions {
         acceleration: raycaster::gpu::Acceleration::Bins,
