@@ -54,12 +54,20 @@ fn local(material: Material, n: vec3<f32>, light: Incoming, to_viewer: vec3<f32>
 }
 
 // Whether something lies between the surface and `light`, arriving as `arriving`: a
-// shadow ray from the point, moved off the surface on the lit side, up to the light.
+// shadow ray from the point, moved off the surface on the lit side, up to the light. A
+// shadow ray into the solid it starts on is blocked where it leaves it, unless the light
+// is inside (solid_exit_t: the moved ray may start beyond a grazing chord).
 fn in_shadow(surface: Surface, n: vec3<f32>, light: Light, arriving: Incoming) -> bool {
     let origin = spawn_origin(surface, n, arriving.to_light);
     var tmax = NO_HIT;
+    var light_distance = NO_HIT;
     if (POINT_LIGHTS && light.is_point != 0u) {
         tmax = distance(light.to_light_or_position, origin);
+        light_distance = distance(light.to_light_or_position, surface.point);
+    }
+    let leaves_at = solid_exit_t(surface, arriving.to_light);
+    if (leaves_at > 0.0 && leaves_at < light_distance) {
+        return true;
     }
     return occluded(Ray(origin, arriving.to_light), 0.0, tmax);
 }

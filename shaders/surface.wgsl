@@ -13,6 +13,9 @@ struct Surface {
     // ellipsoid's point is bounded by the point and the origin alone: its unit-sphere
     // coordinates are within a few units.
     scale: f32,
+    // The primitive hit: a sphere's or an ellipsoid's solid is closed (solid_exit_t).
+    kind: u32,
+    index: u32,
 }
 
 fn max_norm(v: vec3<f32>) -> f32 {
@@ -26,22 +29,22 @@ fn surface_at(hit: Closest, ray: Ray) -> Surface {
     let scale = max(max_norm(ray.origin), max_norm(p));
     if (HAS_SPHERES && hit.kind == KIND_SPHERE) {
         let s = spheres[hit.index];
-        return Surface(p, (p - s.center) / s.radius, s.material, max(scale, max_norm(s.center) + s.radius));
+        return Surface(p, (p - s.center) / s.radius, s.material, max(scale, max_norm(s.center) + s.radius), hit.kind, hit.index);
     }
     if (HAS_ELLIPSOIDS && hit.kind == KIND_ELLIPSOID) {
         let e = ellipsoids[hit.index];
-        return Surface(p, ellipsoid_normal(e, p), e.material, scale);
+        return Surface(p, ellipsoid_normal(e, p), e.material, scale, hit.kind, hit.index);
     }
     if (HAS_PLANES && hit.kind == KIND_PLANE) {
         let pl = planes[hit.index];
-        return Surface(p, pl.normal, pl.material, max(scale, abs(pl.offset)));
+        return Surface(p, pl.normal, pl.material, max(scale, abs(pl.offset)), hit.kind, hit.index);
     }
     if (HAS_TRIANGLES && hit.kind == KIND_TRIANGLE) {
         let tri = triangles[hit.index];
         let extent = max(max(max_norm(tri.v0), max_norm(tri.v1)), max_norm(tri.v2));
-        return Surface(p, triangle_normal(tri), tri.material, max(scale, extent));
+        return Surface(p, triangle_normal(tri), tri.material, max(scale, extent), hit.kind, hit.index);
     }
-    return Surface(p, vec3<f32>(0.0), 0u, scale);
+    return Surface(p, vec3<f32>(0.0), 0u, scale, hit.kind, hit.index);
 }
 
 // 2⁵ ulps of a magnitude: 2⁵ · 2⁻²⁴.
@@ -66,4 +69,28 @@ const SPAWN_OFFSET: f32 = 1.9073486328125e-6;
 fn spawn_origin(surface: Surface, side: vec3<f32>, d: vec3<f32>) -> vec3<f32> {
     let away = max(dot(d, side), 1.0 / 1024.0);
     return surface.point + (SPAWN_OFFSET * surface.scale / away) * d;
+}
+
+// How far a ray from the surface's point along the unit direction d goes inside the closed
+// solid the surface bounds (a sphere or an ellipsoid) before it leaves it again: the chord,
+// 0 or less where d points out of the solid, NO_HIT on an open surface (a plane, a
+// triangle). spawn_origin moves a ray that leaves at a grazing angle c = |N·d| a distance
+// SPAWN_OFFSET · scale / c along itself, and the chord into a sphere of radius r is only
+// 2·r·c long: below c² ≈ SPAWN_OFFSET · scale / (2r) the moved ray starts beyond the chord
+// and never meets the solid it stands in (a shadow ray lit a point the sphere itself hides;
+// a random scene found it, docs/SPEC.md §5). The chord's length needs no search: from a
+// point p on the sphere, |p + t·d − c| = r has the roots 0 and −2 (p − c)·d = −2r N·d, whose
+// error is the normal's, not the point's.
+fn solid_exit_t(surface: Surface, d: vec3<f32>) -> f32 {
+    if (HAS_SPHERES && surface.kind == KIND_SPHERE) {
+        return -2.0 * spheres[surface.index].radius * dot(surface.normal, d);
+    }
+    if (HAS_ELLIPSOIDS && surface.kind == KIND_ELLIPSOID) {
+        // The same chord in the unit sphere's space, where t is the world t (ellipsoid_t).
+        let e = ellipsoids[surface.index];
+        let q = to_unit_sphere_point(e, surface.point);
+        let v = to_unit_sphere_vector(e, d);
+        return -2.0 * dot(q, v) / dot(v, v);
+    }
+    return NO_HIT;
 }

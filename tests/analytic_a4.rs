@@ -265,3 +265,72 @@ fn a_mirror_floor_shows_the_mirrored_scene() {
         assert_matches(&format!("{backend}, mirror floor"), &frame, expected);
     }
 }
+
+/// A glass sphere of index 1.0, radius 0.005, seen head-on from 30 units away, lit from the
+/// side by a directional light. The camera's ray crosses it without bending and meets the
+/// back from inside; there (`-shade_back`) every light on the inner side of the surface is
+/// hidden by the sphere itself, which the shadow ray must cross again to leave it: the back
+/// gets the ambient term alone, however grazing the light. The kernel moves a shadow ray
+/// off the surface along itself by 2⁵ ulps of the point's magnitude (30 here) over the
+/// cosine c of its angle to the surface, and the chord through the sphere is 2·r·c: below
+/// c ≈ 0.075 the moved ray started beyond the chord, and the kernel lit a stripe of the back
+/// that the sphere hides (about 5 % of the disc, up to 8 levels off). A random scene found it
+/// (a shadow ray 0.0036 off a sphere of radius 1.36, 27 units from the camera).
+///
+/// Each pixel is ambient·diffuse twice (front and back, the front's refracted ray carrying
+/// the back at full weight) plus the front's Lambert term; rims within a pixel of the
+/// outline are not checked. An ellipsoid (the sphere stretched along the view) has the same
+/// back, lit by nothing; it is judged against the reference's image.
+#[test]
+fn a_glass_spheres_back_is_in_its_own_shadow_however_grazing_the_light() {
+    const SIDE: f64 = 0.0125;
+    let text = |object: &str| {
+        format!(
+            "OrthographicCamera {{ center 0 0 30 direction 0 0 -1 up 0 1 0 size {SIDE} }}
+             Lights {{ numLights 1 DirectionalLight {{ direction -1 0 0 color 0.5 0.5 0.5 }} }}
+             Background {{ color 0 0 0 ambientLight 0.2 0.2 0.2 }}
+             Materials {{ numMaterials 1
+               PhongMaterial {{ diffuseColor 0.9 0.7 0.5 transparentColor 1 1 1 indexOfRefraction 1 }} }}
+             Group {{ numObjects 1 MaterialIndex 0 {object} }}"
+        )
+    };
+    let radius = 0.005;
+    let sphere = scene(&text(&format!("Sphere {{ center 0 0 0 radius {radius} }}")));
+    let diffuse = DVec3::new(0.9, 0.7, 0.5);
+    let pixel = SIDE / SIZE as f64;
+    let expected = |k: usize| {
+        let (column, row_from_top) = ((k % SIZE as usize) as f64, (k / SIZE as usize) as f64);
+        let x = ((column + 0.5) / SIZE as f64 - 0.5) * SIDE;
+        let y = ((SIZE as f64 - 1.0 - row_from_top + 0.5) / SIZE as f64 - 0.5) * SIDE;
+        let rho = (x * x + y * y).sqrt();
+        if (rho - radius).abs() < pixel {
+            return None; // the outline
+        }
+        if rho > radius {
+            return Some(DVec3::ZERO);
+        }
+        let front_lambert = (x / radius).max(0.0) * 0.5;
+        Some(diffuse * (0.2 + front_lambert) + diffuse * 0.2)
+    };
+    let grazing_back = (0..(SIZE * SIZE) as usize)
+        .filter(|&k| expected(k).is_some_and(|c| c != DVec3::ZERO))
+        .filter(|&k| {
+            let column = (k % SIZE as usize) as f64;
+            let x = ((column + 0.5) / SIZE as f64 - 0.5) * SIDE;
+            (-0.075..-0.017).contains(&(x / radius))
+        })
+        .count();
+    // The stripe where the back's cosine to the light is 0.017 to 0.075 (2 to 8 levels).
+    assert!(grazing_back > 300, "{grazing_back} pixels in the grazing stripe");
+    let shading = Shading { shade_back: true, shadows: true, bounces: 1, ..Shading::default() };
+    for (backend, frame) in renders(&sphere, &options(shading)) {
+        assert_matches(&format!("{backend}, glass sphere's back"), &frame, expected);
+    }
+
+    let ellipsoid = scene(&text(&format!("Transform {{ Scale 1 1 3 Sphere {{ center 0 0 0 radius {radius} }} }}")));
+    let reference = raycaster::cpu::render(&ellipsoid, &options(shading));
+    let seen = |k: usize| DVec3::from_array(reference.color[k].map(f64::from));
+    for (backend, frame) in renders(&ellipsoid, &options(shading)).into_iter().skip(1) {
+        assert_matches(&format!("{backend}, glass ellipsoid's back"), &frame, |k| expected(k).map(|_| seen(k)));
+    }
+}
