@@ -125,23 +125,19 @@ impl Bvh {
     /// side, ordered along the longest centroid axis, any order when the centroids coincide)
     /// when the centroids have no extent, the box has no area, or the SAH split could make a
     /// branch deeper than [`STACK_SIZE`].
-    /// O(n log n); panics only beyond `u32::MAX` primitives.
+    /// O(n log n); the subtrees of the top [`PARALLEL_LEVELS`] levels are built in parallel.
+    /// Panics only beyond `u32::MAX` primitives.
     pub fn build(bounds: &[Aabb]) -> Bvh {
         let count = u32::try_from(bounds.len()).expect("at most u32::MAX primitives");
         if count == 0 {
             return Bvh { nodes: vec![BvhNode::new(&Aabb::EMPTY, 0, 0)], order: Vec::new() };
         }
-        let mut builder = Builder {
-            bounds,
-            centroids: bounds.iter().map(Aabb::centroid).collect(),
-            order: (0..count).collect(),
-            // A binary tree with at most one primitive per leaf has at most 2n − 1 nodes.
-            nodes: Vec::with_capacity(2 * bounds.len() - 1),
-        };
         assert!(fits_in_stack(1, bounds.len()), "too many primitives for a {STACK_SIZE}-entry stack");
-        builder.nodes.push(BvhNode::default());
-        builder.build_node(0, 0, bounds.len(), 1);
-        Bvh { nodes: builder.nodes, order: builder.order }
+        let mut prims: Vec<Prim> =
+            bounds.iter().zip(0..count).map(|(b, index)| Prim { bounds: *b, centroid: b.centroid(), index }).collect();
+        let boxes = range_boxes(&prims);
+        let nodes = subtree(&mut prims, 0, 1, boxes);
+        Bvh { nodes, order: prims.iter().map(|p| p.index).collect() }
     }
 
     /// Expected cost of a random ray through the root box (MacDonald & Booth): the sum over
@@ -314,11 +310,36 @@ fn slab(lo: f32, hi: f32, origin: f32, inv_dir: f32) -> (f32, f32) {
     ((near - origin) * inv_dir, (far - origin) * inv_dir)
 }
 
-struct Builder<'a> {
-    bounds: &'a [Aabb],
-    centroids: Vec<Vec3>,
-    order: Vec<u32>,
-    nodes: Vec<BvhNode>,
+/// Levels of the tree whose two subtrees are built in parallel (rayon): 4 subtrees, enough
+/// for the machines this runs on; each level copies its subtrees' nodes once more.
+const PARALLEL_LEVELS: usize = 2;
+
+/// Below this many primitives a node's subtrees are built on the caller's thread.
+const PARALLEL_MIN: usize = 4096;
+
+/// A primitive as the builder moves it: its box, the box's centroid and its index. The
+/// builder partitions these records themselves, so that every pass reads them in order.
+#[derive(Clone, Copy)]
+struct Prim {
+    bounds: Aabb,
+    centroid: Vec3,
+    index: u32,
+}
+
+/// The union of a range's boxes and the box of its centroids.
+#[derive(Clone, Copy)]
+struct Boxes {
+    bounds: Aabb,
+    centroids: Aabb,
+}
+
+fn range_boxes(prims: &[Prim]) -> Boxes {
+    let mut boxes = Boxes { bounds: Aabb::EMPTY, centroids: Aabb::EMPTY };
+    for p in prims {
+        boxes.bounds = boxes.bounds.union(&p.bounds);
+        boxes.centroids.grow(p.centroid);
+    }
+    boxes
 }
 
 /// Primitives and box of one SAH bin.
@@ -328,128 +349,170 @@ struct Bin {
     count: usize,
 }
 
-/// A split plane between bins `plane - 1` and `plane` along `axis`, with its SAH cost.
+impl Bin {
+    const EMPTY: Bin = Bin { bounds: Aabb::EMPTY, count: 0 };
+
+    fn union(&self, o: &Bin) -> Bin {
+        Bin { bounds: self.bounds.union(&o.bounds), count: self.count + o.count }
+    }
+}
+
+/// A split plane between bins `plane - 1` and `plane` along `axis`, with its SAH cost and
+/// the two sides' boxes and counts.
 struct SahSplit {
     axis: usize,
     plane: usize,
-    left_count: usize,
+    left: Bin,
+    right: Bin,
     cost: f32,
 }
 
-impl Builder<'_> {
-    /// Fills `nodes[node]` (already allocated) with the subtree of `order[start..end]`.
-    fn build_node(&mut self, node: usize, start: usize, end: usize, depth: usize) {
-        let (bounds, centroid_bounds) = self.range_bounds(start, end);
-        match self.split(start, end, depth, &bounds, &centroid_bounds) {
-            None => self.nodes[node] = BvhNode::new(&bounds, start as u32, (end - start) as u32),
-            Some(mid) => {
-                // Both children are allocated together, so that they are adjacent.
-                let left = self.nodes.len();
-                self.nodes.extend([BvhNode::default(); 2]);
-                self.nodes[node] = BvhNode::new(&bounds, left as u32, 0);
-                self.build_node(left, start, mid, depth + 1);
-                self.build_node(left + 1, mid, end, depth + 1);
-            }
-        }
-    }
+/// The subtree of `prims` (`offset` is the first one's place in the final order), its root at
+/// index 0 of the nodes returned and at `depth` in the whole tree.
+fn subtree(prims: &mut [Prim], offset: usize, depth: usize, boxes: Boxes) -> Vec<BvhNode> {
+    // A binary tree with at most one primitive per leaf has at most 2n − 1 nodes.
+    let mut nodes = Vec::with_capacity(2 * prims.len() - 1);
+    nodes.push(BvhNode::default());
+    build_node(&mut nodes, 0, prims, offset, depth, boxes);
+    nodes
+}
 
-    /// Union of the primitives' boxes and box of their centroids.
-    fn range_bounds(&self, start: usize, end: usize) -> (Aabb, Aabb) {
-        let mut bounds = Aabb::EMPTY;
-        let mut centroid_bounds = Aabb::EMPTY;
-        for &prim in &self.order[start..end] {
-            bounds = bounds.union(&self.bounds[prim as usize]);
-            centroid_bounds.grow(self.centroids[prim as usize]);
-        }
-        (bounds, centroid_bounds)
+/// Fills `nodes[node]` (already allocated) with the subtree of `prims`.
+fn build_node(nodes: &mut Vec<BvhNode>, node: usize, prims: &mut [Prim], offset: usize, depth: usize, boxes: Boxes) {
+    let Some((mid, left, right)) = split(prims, depth, &boxes) else {
+        nodes[node] = BvhNode::new(&boxes.bounds, offset as u32, prims.len() as u32);
+        return;
+    };
+    // Both children are allocated together, so that they are adjacent.
+    let first = nodes.len();
+    nodes[node] = BvhNode::new(&boxes.bounds, first as u32, 0);
+    let count = prims.len();
+    let (left_prims, right_prims) = prims.split_at_mut(mid);
+    if depth <= PARALLEL_LEVELS && count >= PARALLEL_MIN {
+        let (left_nodes, right_nodes) = rayon::join(
+            || subtree(left_prims, offset, depth + 1, left),
+            || subtree(right_prims, offset + mid, depth + 1, right),
+        );
+        append_subtrees(nodes, first, &left_nodes, &right_nodes);
+        return;
     }
+    nodes.extend([BvhNode::default(); 2]);
+    build_node(nodes, first, left_prims, offset, depth + 1, left);
+    build_node(nodes, first + 1, right_prims, offset + mid, depth + 1, right);
+}
 
-    /// Partitions `order[start..end]` and returns the first index of the right child, or
-    /// `None` for a leaf.
-    fn split(&mut self, start: usize, end: usize, depth: usize, bounds: &Aabb, centroids: &Aabb) -> Option<usize> {
-        let count = end - start;
-        if count == 1 {
-            return None;
-        }
-        // An SAH split is only taken when both children can still be finished within the stack.
-        let sah = self
-            .best_binned_split(start, end, bounds, centroids)
-            .filter(|s| fits_in_stack(depth + 1, s.left_count) && fits_in_stack(depth + 1, count - s.left_count));
-        let leaf_cost = INTERSECTION_COST * count as f32;
-        if count <= MAX_LEAF_SIZE && sah.as_ref().is_none_or(|s| leaf_cost <= s.cost) {
-            return None;
-        }
-        Some(match sah {
-            Some(s) => self.partition_at_plane(start, end, centroids, &s),
-            None => self.partition_at_median(start, end, (centroids.max - centroids.min).max_position()),
-        })
-    }
+/// Appends two subtrees built apart as the children of the node whose `first` is `first`
+/// (`nodes.len()`): their roots side by side, then the left one's other nodes, then the
+/// right one's, each interior node's `first` moved by where its subtree landed.
+fn append_subtrees(nodes: &mut Vec<BvhNode>, first: usize, left: &[BvhNode], right: &[BvhNode]) {
+    debug_assert_eq!(nodes.len(), first);
+    // Node i > 0 of the left subtree lands at first + 1 + i, of the right at first + L + i.
+    let moved = |n: &BvhNode, by: usize| match n.is_leaf() {
+        true => *n,
+        false => BvhNode { first: n.first + by as u32, ..*n },
+    };
+    let (left_by, right_by) = (first + 1, first + left.len());
+    nodes.push(moved(&left[0], left_by));
+    nodes.push(moved(&right[0], right_by));
+    nodes.extend(left[1..].iter().map(|n| moved(n, left_by)));
+    nodes.extend(right[1..].iter().map(|n| moved(n, right_by)));
+}
 
-    /// The cheapest of the planes between [`BIN_COUNT`] equal bins of the centroids' extent
-    /// along its longest axis, or `None` when the centroids coincide or the box has no area
-    /// (then the SAH cannot tell splits apart). The cost is in the units of a leaf's
-    /// `INTERSECTION_COST · count`: TRAVERSAL_COST + INTERSECTION_COST · Σ (area · count) / area.
-    fn best_binned_split(&self, start: usize, end: usize, bounds: &Aabb, centroids: &Aabb) -> Option<SahSplit> {
-        let area = bounds.surface_area();
-        let axis = (centroids.max - centroids.min).max_position();
-        let extent = centroids.max[axis] - centroids.min[axis];
-        if !(extent > 0.0 && area > 0.0) {
-            return None;
-        }
-        let mut bins = [Bin { bounds: Aabb::EMPTY, count: 0 }; BIN_COUNT];
-        for &prim in &self.order[start..end] {
-            let bin = &mut bins[bin_index(self.centroids[prim as usize][axis], centroids.min[axis], extent)];
-            bin.bounds = bin.bounds.union(&self.bounds[prim as usize]);
-            bin.count += 1;
-        }
-        // right[p]: the bins p.. together, for each plane p.
-        let mut right = [Bin { bounds: Aabb::EMPTY, count: 0 }; BIN_COUNT];
-        let mut acc = Bin { bounds: Aabb::EMPTY, count: 0 };
-        for plane in (1..BIN_COUNT).rev() {
-            acc = Bin { bounds: acc.bounds.union(&bins[plane].bounds), count: acc.count + bins[plane].count };
-            right[plane] = acc;
-        }
-        let mut left = Bin { bounds: Aabb::EMPTY, count: 0 };
-        let mut best: Option<SahSplit> = None;
-        for plane in 1..BIN_COUNT {
-            left =
-                Bin { bounds: left.bounds.union(&bins[plane - 1].bounds), count: left.count + bins[plane - 1].count };
-            if left.count == 0 || right[plane].count == 0 {
-                continue;
-            }
-            let weighted = left.bounds.surface_area() * left.count as f32
-                + right[plane].bounds.surface_area() * right[plane].count as f32;
-            let cost = TRAVERSAL_COST + INTERSECTION_COST * weighted / area;
-            if best.as_ref().is_none_or(|b| cost < b.cost) {
-                best = Some(SahSplit { axis, plane, left_count: left.count, cost });
-            }
-        }
-        best
+/// Partitions `prims` and returns where the right child starts, with both children's
+/// boxes, or `None` for a leaf.
+fn split(prims: &mut [Prim], depth: usize, boxes: &Boxes) -> Option<(usize, Boxes, Boxes)> {
+    let count = prims.len();
+    if count == 1 {
+        return None;
     }
+    // An SAH split is only taken when both children can still be finished within the stack.
+    let sah = best_binned_split(prims, boxes)
+        .filter(|s| fits_in_stack(depth + 1, s.left.count) && fits_in_stack(depth + 1, s.right.count));
+    let leaf_cost = INTERSECTION_COST * count as f32;
+    if count <= MAX_LEAF_SIZE && sah.as_ref().is_none_or(|s| leaf_cost <= s.cost) {
+        return None;
+    }
+    Some(match sah {
+        Some(s) => partition_at_plane(prims, &boxes.centroids, &s),
+        None => {
+            let mid = partition_at_median(prims, (boxes.centroids.max - boxes.centroids.min).max_position());
+            (mid, range_boxes(&prims[..mid]), range_boxes(&prims[mid..]))
+        }
+    })
+}
 
-    fn partition_at_plane(&mut self, start: usize, end: usize, centroids: &Aabb, split: &SahSplit) -> usize {
-        let (axis, min, extent) =
-            (split.axis, centroids.min[split.axis], centroids.max[split.axis] - centroids.min[split.axis]);
-        let range = &mut self.order[start..end];
-        let mut left = 0;
-        for i in 0..range.len() {
-            if bin_index(self.centroids[range[i] as usize][axis], min, extent) < split.plane {
-                range.swap(left, i);
-                left += 1;
-            }
+/// The cheapest of the planes between [`BIN_COUNT`] equal bins of the centroids' extent
+/// along its longest axis, or `None` when the centroids coincide or the box has no area
+/// (then the SAH cannot tell splits apart). The cost is in the units of a leaf's
+/// `INTERSECTION_COST · count`: TRAVERSAL_COST + INTERSECTION_COST · Σ (area · count) / area.
+fn best_binned_split(prims: &[Prim], boxes: &Boxes) -> Option<SahSplit> {
+    let (bounds, centroids) = (&boxes.bounds, &boxes.centroids);
+    let area = bounds.surface_area();
+    let axis = (centroids.max - centroids.min).max_position();
+    let extent = centroids.max[axis] - centroids.min[axis];
+    if !(extent > 0.0 && area > 0.0) {
+        return None;
+    }
+    let mut bins = [Bin::EMPTY; BIN_COUNT];
+    for p in prims {
+        let bin = &mut bins[bin_index(p.centroid[axis], centroids.min[axis], extent)];
+        bin.bounds = bin.bounds.union(&p.bounds);
+        bin.count += 1;
+    }
+    // right[p]: the bins p.. together, for each plane p.
+    let mut right = [Bin::EMPTY; BIN_COUNT];
+    let mut acc = Bin::EMPTY;
+    for plane in (1..BIN_COUNT).rev() {
+        acc = acc.union(&bins[plane]);
+        right[plane] = acc;
+    }
+    let mut left = Bin::EMPTY;
+    let mut best: Option<SahSplit> = None;
+    for plane in 1..BIN_COUNT {
+        left = left.union(&bins[plane - 1]);
+        if left.count == 0 || right[plane].count == 0 {
+            continue;
         }
-        debug_assert_eq!(left, split.left_count);
-        start + left
+        let weighted = left.bounds.surface_area() * left.count as f32
+            + right[plane].bounds.surface_area() * right[plane].count as f32;
+        let cost = TRAVERSAL_COST + INTERSECTION_COST * weighted / area;
+        if best.as_ref().is_none_or(|b| cost < b.cost) {
+            best = Some(SahSplit { axis, plane, left, right: right[plane], cost });
+        }
     }
+    best
+}
 
-    /// Half the primitives each side (the left one has the smaller centroids along `axis`).
-    fn partition_at_median(&mut self, start: usize, end: usize, axis: usize) -> usize {
-        let half = (end - start) / 2;
-        let centroids = &self.centroids;
-        self.order[start..end]
-            .select_nth_unstable_by(half, |&a, &b| centroids[a as usize][axis].total_cmp(&centroids[b as usize][axis]));
-        start + half
+/// Partitions `prims` at the split's plane; returns where the right side starts and both
+/// sides' boxes (their bounds from the split's bins, their centroids' boxes gathered here).
+fn partition_at_plane(prims: &mut [Prim], centroids: &Aabb, split: &SahSplit) -> (usize, Boxes, Boxes) {
+    let (axis, min, extent) =
+        (split.axis, centroids.min[split.axis], centroids.max[split.axis] - centroids.min[split.axis]);
+    let (mut left_centroids, mut right_centroids) = (Aabb::EMPTY, Aabb::EMPTY);
+    let mut left = 0;
+    for i in 0..prims.len() {
+        let centroid = prims[i].centroid;
+        if bin_index(centroid[axis], min, extent) < split.plane {
+            left_centroids.grow(centroid);
+            prims.swap(left, i);
+            left += 1;
+        } else {
+            right_centroids.grow(centroid);
+        }
     }
+    debug_assert_eq!(left, split.left.count);
+    (
+        left,
+        Boxes { bounds: split.left.bounds, centroids: left_centroids },
+        Boxes { bounds: split.right.bounds, centroids: right_centroids },
+    )
+}
+
+/// Half the primitives each side (the left one has the smaller centroids along `axis`).
+fn partition_at_median(prims: &mut [Prim], axis: usize) -> usize {
+    let half = prims.len() / 2;
+    prims.select_nth_unstable_by(half, |a, b| a.centroid[axis].total_cmp(&b.centroid[axis]));
+    half
 }
 
 /// The bin of a centroid coordinate; binning and partitioning must agree, so both use this.
