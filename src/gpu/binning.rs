@@ -112,11 +112,11 @@ impl Bins {
         let rows = rays.height.div_ceil(BIN_ROWS);
         let mut placed: Vec<Placed> = Vec::with_capacity(candidates.len());
         for c in candidates {
-            let corners = match c.points {
-                Some(p) => p.to_vec(),
-                None => box_corners(&c.bounds),
+            let rect = match &c.points {
+                Some(points) => projector.pixel_rect(points),
+                None => projector.pixel_rect(&box_corners(&c.bounds)),
             };
-            let Some(rect) = projector.pixel_rect(&corners) else { continue };
+            let Some(rect) = rect else { continue };
             let item = BinItem { reference: c.reference, near: projector.near_bound(&c.bounds), pixels: 0 };
             placed.push(Placed { item, pixels: rect });
         }
@@ -271,16 +271,14 @@ pub fn candidates(triangles: &[GpuTriangle], sphere_bounds: &[Aabb], ellipsoid_b
     out
 }
 
-fn box_corners(b: &Aabb) -> Vec<Vec3> {
-    (0..8)
-        .map(|k| {
-            Vec3::new(
-                if k & 1 == 0 { b.min.x } else { b.max.x },
-                if k & 2 == 0 { b.min.y } else { b.max.y },
-                if k & 4 == 0 { b.min.z } else { b.max.z },
-            )
-        })
-        .collect()
+fn box_corners(b: &Aabb) -> [Vec3; 8] {
+    std::array::from_fn(|k| {
+        Vec3::new(
+            if k & 1 == 0 { b.min.x } else { b.max.x },
+            if k & 2 == 0 { b.min.y } else { b.max.y },
+            if k & 4 == 0 { b.min.z } else { b.max.z },
+        )
+    })
 }
 
 /// From camera-relative points to pixel coordinates, in f64.
