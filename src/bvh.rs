@@ -310,8 +310,9 @@ fn slab(lo: f32, hi: f32, origin: f32, inv_dir: f32) -> (f32, f32) {
     ((near - origin) * inv_dir, (far - origin) * inv_dir)
 }
 
-/// Levels of the tree whose two subtrees are built in parallel (rayon): 4 subtrees, enough
-/// for the machines this runs on; each level copies its subtrees' nodes once more.
+/// Levels of the tree whose two subtrees are built in parallel (rayon): up to 4 subtrees at
+/// once, chosen for 2 cores (the only machine measured: bunny_40k 15.9 → 10.2 ms). Each
+/// level copies its subtrees' nodes once more, into their parent's array.
 const PARALLEL_LEVELS: usize = 2;
 
 /// Below this many primitives a node's subtrees are built on the caller's thread.
