@@ -659,27 +659,26 @@ fn verbose_and_threads_on_the_cpu() {
     assert!(stderr(&bad).contains("--threads: '0'"), "{}", stderr(&bad));
 }
 
-/// `-v` on the GPU: the adapter, the kernel variant, and the kernel's and the hierarchy's time.
+/// `-v` on the GPU: the adapter, the kernel variant, and the time of the kernel and of what
+/// finds its candidates: the bins for primary rays alone, the hierarchy once shadow rays
+/// need it.
 #[test]
 fn verbose_on_the_gpu_names_adapter_and_kernel() {
     let Some(gpu) = common::gpu() else { return };
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("o.png");
-    let result = octahedron_40x30(&out, &["--verbose", "--backend", "gpu", "--triangle-test", "moller"]);
-    let message = stderr(&result);
-    assert!(result.status.success(), "{message}");
-    assert!(message.contains(&format!("backend: gpu, {}", gpu.adapter_info().name)), "{message}");
-    assert!(message.contains("kernel: moller triangle test, robust sphere test"), "{message}");
-    let needles = [
-        "time: parsing ",
-        " (preparing ",
-        "; building the hierarchy ",
-        ", writing ",
-        "memory: peak resident ",
-        "on the GPU",
-    ];
-    for needle in needles {
-        assert!(message.contains(needle), "{needle}: {message}");
+    for (extra, built) in [(None, "; building the bins "), (Some("-shadows"), "; building the hierarchy ")] {
+        let mut flags = vec!["--verbose", "--backend", "gpu", "--triangle-test", "moller"];
+        flags.extend(extra);
+        let result = octahedron_40x30(&out, &flags);
+        let message = stderr(&result);
+        assert!(result.status.success(), "{message}");
+        assert!(message.contains(&format!("backend: gpu, {}", gpu.adapter_info().name)), "{message}");
+        assert!(message.contains("kernel: moller triangle test, robust sphere test"), "{message}");
+        let needles = ["time: parsing ", " (preparing ", built, ", writing ", "memory: peak resident ", "on the GPU"];
+        for needle in needles {
+            assert!(message.contains(needle), "{needle}: {message}");
+        }
     }
 }
 

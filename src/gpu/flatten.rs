@@ -48,12 +48,6 @@ pub struct SceneBuffers {
 /// 24: 2.4 / 3.6, 48: 2.8 / 6.6, bunny_1k 4.1 / 127.
 pub const BVH_MIN_PRIMITIVES: usize = 8;
 
-/// Below this many pixels `auto` skips the bins: their kernel takes about 20 ms longer to
-/// compile on lavapipe (47 against 26 ms for the hierarchy's, per process, shader cache warm),
-/// more than bins save at such sizes (bunny_1k at 200²: 1.4 against 4.4 ms of kernel time),
-/// while from 512² on they win (bunny_40k: 50 against 85 ms).
-pub const BINS_MIN_PIXELS: u64 = 1 << 18;
-
 /// Bins are used while a bin lists at most this many primitives on average (see
 /// [`binning::ListLengths`]); longer lists, as sub-pixel triangles make, go to the
 /// hierarchy.
@@ -162,8 +156,12 @@ impl SceneBuffers {
         if finite == 0 || options.acceleration == Acceleration::Flat || (auto && finite < options.bvh_min_primitives) {
             return;
         }
-        let pixels = rays.width as u64 * rays.height as u64;
-        let bins_asked = options.acceleration == Acceleration::Bins || (auto && pixels >= BINS_MIN_PIXELS);
+        // `auto` tries bins at every size: their kernel, without loops over its rays, compiles
+        // faster than the hierarchy's (cold shader cache, 200²: bunny_1k 86 against 193 ms of
+        // rendering), and building bins costs less than building the hierarchy (bunny_40k at
+        // 16²: 2.2 against 13.8 ms), so even a 16² image is quicker with them (35.0 against
+        // 42.3 ms of rendering). Long lists still go to the hierarchy, below.
+        let bins_asked = options.acceleration == Acceleration::Bins || auto;
         if bins_asked && !no_bins {
             let candidates = binning::candidates(&self.triangles, &self.sphere_bounds, &self.ellipsoid_bounds);
             let forced = options.acceleration == Acceleration::Bins;

@@ -194,8 +194,9 @@ impl<'a> LiveView<'a> {
     }
 
     /// Once the first frame is shown, a tiny frame, thrown away, compiles the kernel variant
-    /// of the small frames rendered while the camera moves (below 512² the cost model
-    /// walks the hierarchy rather than bins), so that the first drag does not wait for it.
+    /// of the small frames rendered while the camera moves (at a smaller size a bin covers
+    /// more of the scene, and lists too long send the cost model to the hierarchy), so that
+    /// the first drag does not wait for it.
     fn warm_up(&mut self) -> Result<(), Failure> {
         self.warmed = true;
         // The reference compiles nothing.
