@@ -663,15 +663,15 @@ fn one_point_three_million_triangles() {
 /// the same normals. Ties (two primitives at exactly the same t) may pick either.
 #[test]
 fn gpu_hierarchy_matches_flat_loops() {
-    use raycaster::gpu::GpuOptions;
+    use raycaster::gpu::{Acceleration, GpuOptions};
     use raycaster::render::RenderOptions;
     if common::gpu().is_none() {
         return;
     }
     let gpu = common::gpu().unwrap();
-    let with_bvh_from = |count| gpu.on_same_device(GpuOptions { bvh_min_primitives: count, ..GpuOptions::default() });
-    let flat = with_bvh_from(usize::MAX);
-    let forced = with_bvh_from(1);
+    let with = |acceleration| gpu.on_same_device(GpuOptions { acceleration, ..GpuOptions::default() });
+    // Asked for by name: `auto` would take bins for these primary rays.
+    let (flat, forced) = (with(Acceleration::Flat), with(Acceleration::Hierarchy));
     let mut scenes: Vec<(String, raycaster::scene::Scene, Option<tempfile::TempDir>)> = vec![
         {
             let (dir, scene) = common::hard::load_hard_ok("closed_mesh_inside.txt");
