@@ -125,7 +125,7 @@ impl Bvh {
     /// side, ordered along the longest centroid axis, any order when the centroids coincide)
     /// when the centroids have no extent, the box has no area, or the SAH split could make a
     /// branch deeper than [`STACK_SIZE`].
-    /// O(n log n); the subtrees of the top [`PARALLEL_LEVELS`] levels are built in parallel.
+    /// O(n log n); the subtrees of the top two levels are built in parallel (rayon).
     /// Panics only beyond `u32::MAX` primitives.
     pub fn build(bounds: &[Aabb]) -> Bvh {
         let count = u32::try_from(bounds.len()).expect("at most u32::MAX primitives");
