@@ -48,6 +48,13 @@ pub struct SceneBuffers {
 /// 24: 2.4 / 3.6, 48: 2.8 / 6.6, bunny_1k 4.1 / 127.
 pub const BVH_MIN_PRIMITIVES: usize = 8;
 
+/// Below this many pixels `auto` walks samples (`-random_samples` and the like) through the
+/// hierarchy: there the bins' packets of samples lost to it (rendering at 200², 5 interleaved
+/// runs: scene7_03 with 4 jittered samples 241 against 224 ms, scene7_04 with 9, 8333 against
+/// 8178 ms), while at 512² they win (bunny_40k, 4 samples: 723 against 1221 ms of kernel).
+/// One ray a pixel takes bins at every size.
+pub const SAMPLED_BINS_MIN_PIXELS: u64 = 1 << 18;
+
 /// Bins are used while a bin lists at most this many primitives on average (see
 /// [`binning::ListLengths`]); longer lists, as sub-pixel triangles make, go to the
 /// hierarchy.
@@ -156,12 +163,15 @@ impl SceneBuffers {
         if finite == 0 || options.acceleration == Acceleration::Flat || (auto && finite < options.bvh_min_primitives) {
             return;
         }
-        // `auto` tries bins at every size: their kernel, without loops over its rays, compiles
-        // faster than the hierarchy's (cold shader cache, 200²: bunny_1k 86 against 193 ms of
-        // rendering), and building bins costs less than building the hierarchy (bunny_40k at
-        // 16²: 2.2 against 13.8 ms), so even a 16² image is quicker with them (35.0 against
-        // 42.3 ms of rendering). Long lists still go to the hierarchy, below.
-        let bins_asked = options.acceleration == Acceleration::Bins || auto;
+        // `auto` tries bins at every size for one ray a pixel: their kernel, without loops
+        // over its rays, compiles faster than the hierarchy's (cold shader cache, 200²:
+        // bunny_1k 86 against 193 ms of rendering), and building bins costs less than building
+        // the hierarchy (bunny_40k at 16²: 2.2 against 13.8 ms), so even a 16² image is
+        // quicker with them (35.0 against 42.3 ms of rendering). Samples take bins from
+        // SAMPLED_BINS_MIN_PIXELS on. Long lists still go to the hierarchy, below.
+        let pixels = rays.width as u64 * rays.height as u64;
+        let bins_asked =
+            options.acceleration == Acceleration::Bins || (auto && (!sampled || pixels >= SAMPLED_BINS_MIN_PIXELS));
         if bins_asked && !no_bins {
             let candidates = binning::candidates(&self.triangles, &self.sphere_bounds, &self.ellipsoid_bounds);
             let forced = options.acceleration == Acceleration::Bins;
