@@ -59,16 +59,15 @@ fn local(material: Material, n: vec3<f32>, light: Incoming, to_viewer: vec3<f32>
 // is inside (solid_exit_t: the moved ray may start beyond a grazing chord).
 fn in_shadow(surface: Surface, n: vec3<f32>, light: Light, arriving: Incoming) -> bool {
     let origin = spawn_origin(surface, n, arriving.to_light);
-    var tmax = NO_HIT;
-    var light_distance = NO_HIT;
-    if (POINT_LIGHTS && light.is_point != 0u) {
-        tmax = distance(light.to_light_or_position, origin);
-        light_distance = distance(light.to_light_or_position, surface.point);
+    let point_light = POINT_LIGHTS && light.is_point != 0u;
+    if (HAS_SPHERES || HAS_ELLIPSOIDS) {
+        let leaves_at = solid_exit_t(surface, arriving.to_light);
+        let light_distance = select(NO_HIT, distance(light.to_light_or_position, surface.point), point_light);
+        if (leaves_at > 0.0 && leaves_at < light_distance) {
+            return true;
+        }
     }
-    let leaves_at = solid_exit_t(surface, arriving.to_light);
-    if (leaves_at > 0.0 && leaves_at < light_distance) {
-        return true;
-    }
+    let tmax = select(NO_HIT, distance(light.to_light_or_position, origin), point_light);
     return occluded(Ray(origin, arriving.to_light), 0.0, tmax);
 }
 
@@ -105,8 +104,12 @@ const LIGHT_CACHE: u32 = 4u;
 var<private> cached_lights: array<Light, LIGHT_CACHE>;
 var<private> only_material: Material;
 
-// Called by the entry points before they shade.
+// Called by the entry points before they shade. Only colour is shaded: a kernel for
+// normals or depth alone loads nothing.
 fn load_shading_data() {
+    if (!WANT_COLOR) {
+        return;
+    }
     if (NUM_LIGHTS <= LIGHT_CACHE) {
         for (var k = 0u; k < NUM_LIGHTS; k++) {
             cached_lights[k] = lights[k];
