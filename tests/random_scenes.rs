@@ -31,6 +31,14 @@
 //! [`MIN_PIXELS`] for why no smaller images). Hit/miss disagreements are counted, and every
 //! scene that differs at all is printed with `--nocapture` even when it passes.
 //!
+//! Besides those, a colour pixel may differ where its reference ray tree has a secondary ray
+//! that meets another surface closer to its start than the kernel's spawn offset
+//! (`common::spawn_gap`, docs/SPEC.md §5): the kernel's secondary rays start beyond such a
+//! surface by design. A soup mesh folded onto itself at half a degree made a line of them
+//! (2 pixels of a 12 × 87 image, 5 of a 49 × 37 one, up to 33 levels off). They are found
+//! from the reference's geometry alone, never from the GPU's image, printed with the reason,
+//! and counted in the run's summary.
+//!
 //! `RANDOM_SCENES_CASES=N` runs N cases instead of the default, for a longer search.
 //! `RANDOM_SCENES_SEED=N` reruns the cases of the seed a run printed; failures found are also
 //! persisted by proptest (`tests/proptest-regressions/`) and replayed first.
@@ -41,8 +49,9 @@ use proptest::prelude::*;
 use proptest::test_runner::{Config, FileFailurePersistence, RngAlgorithm, TestError, TestRng, TestRunner};
 use raycaster::gpu::{GpuError, GpuRenderer};
 use raycaster::grid::GridSize;
-use raycaster::metrics::{compare_frames, depth_range_of};
-use raycaster::render::{RenderOptions, Shading};
+use raycaster::image_io::color_image;
+use raycaster::metrics::{compare_frames, depth_range_of, OutputErrors};
+use raycaster::render::{Frame, Output, RenderOptions, Shading};
 use raycaster::scene::{generate, load_scene, Scene};
 use std::cell::RefCell;
 use std::fmt::Write as _;
@@ -751,6 +760,8 @@ struct Totals {
     hits: usize,
     hit_mismatches: usize,
     off_by_more_than_one: usize,
+    /// Of those, colour pixels within the kernel's spawn gap (`common::spawn_gap`).
+    within_spawn_gap: usize,
     /// Cases the kernel refused for a texture, by design (see the module's notes).
     texture_refusals: usize,
     reference_seconds: f64,
@@ -789,6 +800,7 @@ fn check(gpu: &GpuRenderer, spec: &SceneSpec, totals: &RefCell<Totals>) -> Resul
     let reference = raycaster::cpu::render(&scene, &options);
     let reference_seconds = start.elapsed().as_secs_f64() - gpu_seconds;
     let errors = compare_frames(&ours, &reference, depth_range_of(&reference));
+    let excused = colour_pixels_within_spawn_gap(&scene, spec, &ours, &reference);
 
     let pixels = options.pixel_count();
     let allowed = pixels / 1000;
@@ -799,12 +811,20 @@ fn check(gpu: &GpuRenderer, spec: &SceneSpec, totals: &RefCell<Totals>) -> Resul
     totals.gpu_seconds += gpu_seconds;
     totals.hit_mismatches += errors.first().map_or(0, |e| e.hit_mismatches);
     totals.off_by_more_than_one += errors.iter().map(|e| e.image.off_by_more_than_one).sum::<usize>();
-    let failed = errors.iter().any(|e| e.image.off_by_more_than_one > allowed || e.non_finite > 0);
+    totals.within_spawn_gap += excused.len();
+    // Only colour has secondary rays: the excused pixels are colour pixels.
+    let counted = |e: &OutputErrors| match e.output {
+        Output::Color => e.image.off_by_more_than_one - excused.len(),
+        _ => e.image.off_by_more_than_one,
+    };
+    let failed = errors.iter().any(|e| counted(e) > allowed || e.non_finite > 0);
+    let excuses: String =
+        excused.iter().map(|(i, row, why)| format!("pixel ({i}, {row}) from the top: {why}\n")).collect();
     if !failed && errors.iter().any(|e| e.hit_mismatches > 0 || e.image.off_by_more_than_one > 0) {
         // Within the contract, but worth seeing (with --nocapture): these are the silhouettes
         // where f32 and f64 part.
         println!(
-            "within the contract ({allowed} allowed per output), but not equal:\n{}\n{}",
+            "within the contract ({allowed} allowed per output), but not equal:\n{}\n{excuses}{}",
             raycaster::metrics::errors_table(&errors),
             reproduce()
         );
@@ -813,12 +833,32 @@ fn check(gpu: &GpuRenderer, spec: &SceneSpec, totals: &RefCell<Totals>) -> Resul
         let table = raycaster::metrics::errors_table(&errors);
         let (min, max) = depth_range_of(&reference);
         return Err(TestCaseError::fail(format!(
-            "GPU and reference disagree (allowed: {allowed} pixels more than 1 level off per output, no NaN/inf)\n\
-             {table}\ndepth range {min} {max}\n{}",
+            "GPU and reference disagree (allowed: {allowed} pixels more than 1 level off per output, no NaN/inf, \
+             besides colour pixels within the kernel's spawn gap)\n\
+             {table}\n{excuses}depth range {min} {max}\n{}",
             reproduce()
         )));
     }
     Ok(())
+}
+
+/// The colour pixels more than one level apart whose colour depends on a surface within the
+/// kernel's spawn gap (`common::spawn_gap`), with the reason: column, row from the top.
+fn colour_pixels_within_spawn_gap(
+    scene: &Scene,
+    spec: &SceneSpec,
+    ours: &Frame,
+    reference: &Frame,
+) -> Vec<(u32, u32, String)> {
+    if spec.shading.bounces == 0 && !spec.shading.shadows {
+        return Vec::new();
+    }
+    let (a, b) = (color_image(ours), color_image(reference));
+    let gaps = common::spawn_gap::SpawnGaps::new(scene, spec.shading);
+    a.enumerate_pixels()
+        .filter(|&(i, row, p)| (0..3).any(|c| p[c].abs_diff(b.get_pixel(i, row)[c]) > 1))
+        .filter_map(|(i, row, _)| gaps.within_spawn_gap(spec.width, spec.height, i, row).map(|why| (i, row, why)))
+        .collect()
 }
 
 /// Whether the kernel refused a texture by design: coordinates outside its f32 contract, or a
@@ -917,7 +957,8 @@ fn gpu_matches_reference_on_random_scenes() {
     let t = totals.borrow();
     println!(
         "random scenes: {} renders ({} pixels, {} hit) in {:.1} s (reference {:.1} s, GPU {:.1} s); \
-         {} hit/miss disagreements, {} output pixels more than 1 level off; {} refused for a texture",
+         {} hit/miss disagreements, {} output pixels more than 1 level off ({} of them within the kernel's \
+         spawn gap); {} refused for a texture",
         t.cases,
         t.pixels,
         t.hits,
@@ -926,6 +967,7 @@ fn gpu_matches_reference_on_random_scenes() {
         t.gpu_seconds,
         t.hit_mismatches,
         t.off_by_more_than_one,
+        t.within_spawn_gap,
         t.texture_refusals
     );
     passed(seed, result);

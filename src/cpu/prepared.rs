@@ -104,6 +104,14 @@ pub struct Hit {
     triangle: usize,
 }
 
+impl Hit {
+    /// Whether `other` is on the same primitive (for a mesh, the same triangle): a test asks
+    /// whether a secondary ray met the surface it left or another one.
+    pub fn same_primitive(&self, other: &Hit) -> bool {
+        (self.primitive, self.triangle) == (other.primitive, other.triangle)
+    }
+}
+
 /// The surface at a hit: what shading, and the secondary rays to come, need.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Surface {
@@ -154,39 +162,52 @@ impl<'a> ReferenceScene<'a> {
     fn build_grid(&self, size: GridSize) -> SceneGrid {
         let (mut items, mut footprints, mut unbounded) = (Vec::new(), Vec::new(), Vec::new());
         for (primitive, p) in self.primitives.iter().enumerate() {
-            let to_world = p.transform.map(|k| self.transforms[k].to_world);
-            let box_of = |vertices: [DVec3; 3]| {
-                let map = |v: DVec3| to_world.map_or(v, |m| m.transform_point3(v));
-                Footprint::Box(Bounds::of_points(vertices.map(map)))
+            let (count, is_mesh) = match &p.geometry {
+                Geometry::Plane { .. } => {
+                    unbounded.push(primitive);
+                    continue;
+                }
+                Geometry::Mesh { mesh, .. } => (mesh.triangles.len(), true),
+                Geometry::Sphere { .. } | Geometry::Triangle(_) => (1, false),
             };
-            match &p.geometry {
-                Geometry::Plane { .. } => unbounded.push(primitive),
-                &Geometry::Sphere { center, radius } => {
-                    items.push(Item { primitive, triangle: None });
-                    footprints.push(match to_world {
-                        None => Footprint::Sphere { center, radius },
-                        // The box of the ellipsoid the transformed sphere is.
-                        Some(m) => Footprint::Box(Bounds::ellipsoid(
-                            &(m * DMat4::from_translation(center) * DMat4::from_scale(DVec3::splat(radius))),
-                        )),
-                    });
-                }
-                // The handout's "special case" for transformed triangles: the box of the
-                // transformed vertices, not the transformed box.
-                Geometry::Triangle(vertices) => {
-                    items.push(Item { primitive, triangle: None });
-                    footprints.push(box_of(*vertices));
-                }
-                Geometry::Mesh { mesh, .. } => {
-                    for k in 0..mesh.triangles.len() {
-                        items.push(Item { primitive, triangle: Some(k) });
-                        footprints.push(box_of(mesh.triangle(k)));
-                    }
-                }
+            for k in 0..count {
+                items.push(Item { primitive, triangle: is_mesh.then_some(k) });
+                footprints.push(self.footprint(primitive, k).expect("a bounded primitive"));
             }
         }
         let bounds = footprints.iter().fold(Bounds::EMPTY, |all, f| all.union(&f.bounds()));
         SceneGrid { grid: Grid::new(bounds, size, &footprints), items, unbounded }
+    }
+
+    /// Where triangle `triangle` of primitive `primitive` (0 for a primitive that is not a
+    /// mesh) lies in the world; `None` for a plane.
+    fn footprint(&self, primitive: usize, triangle: usize) -> Option<Footprint> {
+        let p = &self.primitives[primitive];
+        let to_world = p.transform.map(|k| self.transforms[k].to_world);
+        let box_of = |vertices: [DVec3; 3]| {
+            let map = |v: DVec3| to_world.map_or(v, |m| m.transform_point3(v));
+            Footprint::Box(Bounds::of_points(vertices.map(map)))
+        };
+        Some(match &p.geometry {
+            Geometry::Plane { .. } => return None,
+            &Geometry::Sphere { center, radius } => match to_world {
+                None => Footprint::Sphere { center, radius },
+                // The box of the ellipsoid the transformed sphere is.
+                Some(m) => Footprint::Box(Bounds::ellipsoid(
+                    &(m * DMat4::from_translation(center) * DMat4::from_scale(DVec3::splat(radius))),
+                )),
+            },
+            // The handout's "special case" for transformed triangles: the box of the
+            // transformed vertices, not the transformed box.
+            Geometry::Triangle(vertices) => box_of(*vertices),
+            Geometry::Mesh { mesh, .. } => box_of(mesh.triangle(triangle)),
+        })
+    }
+
+    /// The world box of what `hit` is on (a sphere, a triangle, a mesh's triangle); `None`
+    /// for a plane.
+    pub fn world_bounds(&self, hit: &Hit) -> Option<Bounds> {
+        self.footprint(hit.primitive, hit.triangle).map(|f| f.bounds())
     }
 
     fn prepare(&mut self, object: &'a Object, transform: Option<usize>) -> Node {

@@ -5,6 +5,7 @@
 pub mod bin;
 pub mod hard;
 pub mod occlusion;
+pub mod spawn_gap;
 
 use raycaster::gpu::GpuRenderer;
 use std::io::Write as _;
