@@ -748,7 +748,7 @@ impl ReadTile<'_> {
     }
 
     /// The word of output `slot` (0 = the first output asked for) of each pixel.
-    fn output_words(&self, slot: usize) -> impl Iterator<Item = u32> + '_ {
+    fn output_words(&self, slot: usize) -> impl ExactSizeIterator<Item = u32> + '_ {
         assert!(self.layout.packed, "a float tile holds no 8-bit images");
         let stride = self.layout.words() as usize;
         self.words.iter().skip(slot).step_by(stride).copied().take(self.width as usize * self.rows as usize)
@@ -780,10 +780,10 @@ impl ReadTile<'_> {
 }
 
 /// Bytes r, g, b of words `r | g << 8 | b << 16`.
-fn rgb_of(words: impl Iterator<Item = u32>) -> Vec<u8> {
-    let mut out = Vec::new();
-    for w in words {
-        out.extend_from_slice(&w.to_le_bytes()[..3]);
+fn rgb_of(words: impl ExactSizeIterator<Item = u32>) -> Vec<u8> {
+    let mut out = vec![0; 3 * words.len()];
+    for (rgb, w) in out.chunks_exact_mut(3).zip(words) {
+        rgb.copy_from_slice(&w.to_le_bytes()[..3]);
     }
     out
 }
