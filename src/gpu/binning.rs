@@ -151,15 +151,18 @@ impl Bins {
         let count = count.min(self.rows - first);
         let last = first + count - 1;
         // Every primitive is looked at for every band: O(primitives) a tile (bunny_40k: a
-        // fraction of a millisecond), and no memory beyond the frame's placements.
-        let in_band = || {
-            self.placed.iter().filter_map(move |p| {
+        // fraction of a millisecond), and no memory beyond the frame's placements and the
+        // band's own.
+        let in_band: Vec<(&Placed, [u32; 4])> = self
+            .placed
+            .iter()
+            .filter_map(|p| {
                 let [c0, r0, c1, r1] = p.bins();
                 (r0 <= last && r1 >= first).then_some((p, [c0, r0.max(first) - first, c1, r1.min(last) - first]))
             })
-        };
+            .collect();
         let mut counts = vec![0u32; (count * self.columns) as usize];
-        for (_, [c0, r0, c1, r1]) in in_band() {
+        for &(_, [c0, r0, c1, r1]) in &in_band {
             for row in r0..=r1 {
                 for col in c0..=c1 {
                     counts[(row * self.columns + col) as usize] += 1;
@@ -178,7 +181,7 @@ impl Bins {
         for (slot, range) in fill.iter_mut().zip(&ranges) {
             *slot = range[0];
         }
-        for (placed, [c0, r0, c1, r1]) in in_band() {
+        for &(placed, [c0, r0, c1, r1]) in &in_band {
             for row in r0..=r1 {
                 for col in c0..=c1 {
                     let slot = &mut fill[(row * self.columns + col) as usize];
