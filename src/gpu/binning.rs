@@ -125,7 +125,7 @@ impl Bins {
             return None;
         }
         // Stable, so that equally near primitives keep their order in every band's lists.
-        placed.sort_by(|a, b| a.item.near.total_cmp(&b.item.near));
+        let placed = sorted_by_near(placed);
         let eye_triangles =
             triangles.iter().map(|t| EyeTriangle::new(t, rays.orthographic, projector.direction)).collect();
         Some(Bins { columns, rows, placed, row_items, eye_triangles, build_ms: start.elapsed().as_secs_f64() * 1e3 })
@@ -212,8 +212,7 @@ fn pixels_in_bin([c0, r0, c1, r1]: [u32; 4], column: u32, row: u32) -> u32 {
 /// The lengths of the frame's lists, and the items of each bin row, counted row by row
 /// (a row of counts at a time, never the frame's).
 fn list_lengths(placed: &[Placed], columns: u32, rows: u32) -> (ListLengths, Vec<u64>) {
-    let mut by_first_row: Vec<&Placed> = placed.iter().collect();
-    by_first_row.sort_by_key(|p| p.bins()[1]);
+    let by_first_row = sorted_by_key(placed.iter().collect(), |p| p.bins()[1]);
     let mut next = by_first_row.iter().peekable();
     let mut active: Vec<&Placed> = Vec::new();
     // Differences between neighbouring columns' counts.
@@ -243,6 +242,52 @@ fn list_lengths(placed: &[Placed], columns: u32, rows: u32) -> (ListLengths, Vec
     }
     let bins = (columns as u64 * rows as u64).max(1);
     (ListLengths { mean: total as f64 / bins as f64, max }, row_items)
+}
+
+/// `placed` sorted by the lower bound of their distance, as `f32::total_cmp` orders it,
+/// equal bounds in their order: [`sorted_by_key`] on the bits that order floats as
+/// unsigned integers (the sign flipped for positive numbers, every bit for negative ones).
+fn sorted_by_near(placed: Vec<Placed>) -> Vec<Placed> {
+    sorted_by_key(placed, |p| {
+        let bits = p.item.near.to_bits();
+        if bits >> 31 == 1 {
+            !bits
+        } else {
+            bits | 1 << 31
+        }
+    })
+}
+
+/// `items` sorted by `key`, stably: a least-significant-digit radix sort, one pass per byte
+/// of the key that is not the same for every item (bunny_40k's 40 000 triangles at 1024²:
+/// see `Bins::build`'s time in the README's table of measurements).
+fn sorted_by_key<T: Copy>(mut items: Vec<T>, key: impl Fn(&T) -> u32) -> Vec<T> {
+    let keys: Vec<u32> = items.iter().map(&key).collect();
+    let (mut from, mut to) = ((0..items.len() as u32).collect::<Vec<u32>>(), vec![0u32; items.len()]);
+    for shift in [0, 8, 16, 24] {
+        let digit = |k: u32| (keys[k as usize] >> shift & 0xff) as usize;
+        let mut starts = [0usize; 257];
+        for &k in &from {
+            starts[digit(k) + 1] += 1;
+        }
+        if starts.contains(&items.len()) {
+            continue; // every key has this byte: the pass would change nothing
+        }
+        for d in 0..256 {
+            starts[d + 1] += starts[d];
+        }
+        for &k in &from {
+            let d = digit(k);
+            to[starts[d]] = k;
+            starts[d] += 1;
+        }
+        std::mem::swap(&mut from, &mut to);
+    }
+    let original = items.clone();
+    for (item, &k) in items.iter_mut().zip(&from) {
+        *item = original[k as usize];
+    }
+    items
 }
 
 /// How long the bins' lists are: the cost model's inputs.
@@ -423,5 +468,46 @@ impl EyeTriangle {
         let normal = (b - a).cross(c - a);
         let plane = [normal.x as f32, normal.y as f32, normal.z as f32, normal.dot(a) as f32];
         EyeTriangle { edges: [edge(b, c), edge(c, a), edge(a, b)], plane }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn placed(reference: u32, near: f32) -> Placed {
+        Placed { item: BinItem { reference, near, pixels: 0 }, pixels: [0; 4] }
+    }
+
+    /// The radix sort against the standard library's stable sort by `f32::total_cmp`: signs,
+    /// both zeros, infinities, equal keys (whose order must be kept, told apart by
+    /// `reference`), and keys that differ only in their low or high bytes.
+    #[test]
+    fn sorted_by_near_is_the_stable_total_order() {
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state
+        };
+        let special = [0.0, -0.0, 1.0, -1.0, f32::INFINITY, f32::NEG_INFINITY, 1e-40, -1e-40, 3.5, 3.5];
+        let mut items: Vec<Placed> = special.iter().enumerate().map(|(k, &near)| placed(k as u32, near)).collect();
+        for k in 0..5000u32 {
+            let r = next();
+            let near = match r % 4 {
+                0 => (r >> 8) as u32 as f32 / 1e6,                          // positive, many distinct
+                1 => -((r >> 8) as u16 as f32),                             // negative, many equal
+                2 => f32::from_bits(0x4000_0000 | (r >> 40) as u32 & 0xff), // low byte only
+                _ => special[(r >> 8) as usize % special.len()],            // repeats
+            };
+            items.push(placed(1000 + k, near));
+        }
+        let mut expected = items.clone();
+        expected.sort_by(|a, b| a.item.near.total_cmp(&b.item.near));
+        let got = sorted_by_near(items);
+        let order = |v: &[Placed]| v.iter().map(|p| p.item.reference).collect::<Vec<_>>();
+        assert_eq!(order(&got), order(&expected));
+        assert!(sorted_by_near(Vec::new()).is_empty());
     }
 }
