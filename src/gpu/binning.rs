@@ -48,12 +48,19 @@ pub struct Bins {
     pub columns: u32,
     /// Bin rows of the frame.
     pub rows: u32,
-    /// Every primitive some ray may meet, nearest first: the order of every bin's list.
+    /// Every primitive some ray may meet, nearest first once [`Bins::finish`] has sorted
+    /// them: the order of every bin's list.
     placed: Vec<Placed>,
     /// Items listed in each bin row: what a band's buffers must hold.
     row_items: Vec<u64>,
-    /// Per triangle, its edge planes and plane (same index as the triangle).
+    /// Per triangle, its edge planes and plane (same index as the triangle), from
+    /// [`Bins::finish`].
     pub eye_triangles: Vec<EyeTriangle>,
+    /// The camera's kind and unit viewing direction, for the edge planes.
+    orthographic: bool,
+    direction: DVec3,
+    /// Whether [`Bins::finish`] has run: lists are filled only then.
+    finished: bool,
     pub build_ms: f64,
 }
 
@@ -95,10 +102,11 @@ impl Bins {
     /// `reach` pixels from their centres (0 for one ray through each centre, ½ for samples
     /// anywhere in the pixel), or `None` when `worth_it` turns down the lists' lengths,
     /// which are known before any list is filled (so a scene that goes to the hierarchy
-    /// pays only for the projection and the count).
+    /// pays only for the projection and the count). The lists' order and the edge planes
+    /// come later, from [`Bins::finish`], so that the kernel can be compiled meanwhile: the
+    /// choice of kernel needs only the lengths.
     pub fn build(
         rays: &PrimaryRays,
-        triangles: &[GpuTriangle],
         candidates: &[Candidate],
         reach: f64,
         worth_it: impl FnOnce(&ListLengths) -> bool,
@@ -124,11 +132,28 @@ impl Bins {
         if !worth_it(&lengths) {
             return None;
         }
+        Some(Bins {
+            columns,
+            rows,
+            placed,
+            row_items,
+            eye_triangles: Vec::new(),
+            orthographic: rays.orthographic,
+            direction: projector.direction,
+            finished: false,
+            build_ms: start.elapsed().as_secs_f64() * 1e3,
+        })
+    }
+
+    /// Orders the lists, nearest first, and builds the edge planes of `triangles` (the
+    /// triangles [`Bins::build`] was given); counted in `build_ms`.
+    pub fn finish(&mut self, triangles: &[GpuTriangle]) {
+        let start = crate::clock::Instant::now();
         // Stable, so that equally near primitives keep their order in every band's lists.
-        let placed = sorted_by_near(placed);
-        let eye_triangles =
-            triangles.iter().map(|t| EyeTriangle::new(t, rays.orthographic, projector.direction)).collect();
-        Some(Bins { columns, rows, placed, row_items, eye_triangles, build_ms: start.elapsed().as_secs_f64() * 1e3 })
+        self.placed = sorted_by_near(std::mem::take(&mut self.placed));
+        self.eye_triangles = triangles.iter().map(|t| EyeTriangle::new(t, self.orthographic, self.direction)).collect();
+        self.finished = true;
+        self.build_ms += start.elapsed().as_secs_f64() * 1e3;
     }
 
     /// The bin rows `first .. first + count` that hold image rows `first_row .. first_row +
@@ -148,6 +173,7 @@ impl Bins {
     /// The lists of bin rows `first .. first + count`, each nearest first, exactly as the
     /// frame's own lists would hold them.
     pub fn band(&self, first: u32, count: u32) -> Band {
+        assert!(self.finished, "Bins::finish orders the lists before a band is filled");
         let count = count.min(self.rows - first);
         let last = first + count - 1;
         // Every primitive is looked at for every band: O(primitives) a tile (bunny_40k: a

@@ -177,7 +177,7 @@ impl SceneBuffers {
             let forced = options.acceleration == Acceleration::Bins;
             // A sample lies within half a pixel of its pixel's centre (docs/SPEC.md §8).
             let reach = if sampled { 0.5 } else { 0.0 };
-            self.bins = Bins::build(rays, &self.triangles, &candidates, reach, |lengths| {
+            self.bins = Bins::build(rays, &candidates, reach, |lengths| {
                 forced || (lengths.mean <= BINS_MAX_MEAN_LIST && lengths.max <= LOOP_LIMIT / 2)
             });
             if self.bins.is_some() {

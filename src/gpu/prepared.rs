@@ -8,7 +8,7 @@
 //! renders the tiles one after another and awaits each.
 
 use super::bindings::BindingSet;
-use super::binning::{Bins, BIN_ROWS};
+use super::binning::{Band, Bins, BIN_ROWS};
 use super::flatten::{GridChoice, SceneBuffers};
 use super::layout::{
     BinItem, GpuSampling, GpuTexture, Handover, Params, PixelLayout, PACKED_MISS, PERLIN_PERMUTATION, SAMPLE_WORDS,
@@ -48,6 +48,9 @@ pub struct PreparedScene<'a> {
     /// The frame's screen-space bins, whose lists each tile fills for its own band of rows
     /// ([`Bins::band`]) into its slot's buffers.
     bins: Option<Bins>,
+    /// The lists of the first tile of the whole image (its first bin row, bin rows and
+    /// lists), filled while the kernel compiled; taken by that tile.
+    first_band: std::sync::Mutex<Option<(u32, u32, Band)>>,
 }
 
 /// The `counters` binding: [`STATS_SLOTS`] slots of [`STATS_WORDS`] words, with a buffer to
@@ -139,9 +142,6 @@ impl<'a> PreparedScene<'a> {
             }
         };
         let bindings = gpu.bindings_for(&stages, &scene.path)?;
-        // A sampled render dispatches its samples and filter kernels only.
-        let pipeline = options.sampling.is_none().then(|| gpu.pipeline(config, &bindings));
-        let inputs = upload_inputs(gpu, &buffers)?;
         let mut tile_rows = gpu.tile_rows(options.width, &layout)?;
         let limit = gpu.limits.max_storage_buffer_binding_size;
         if let Some(bins) = &buffers.bins {
@@ -155,42 +155,67 @@ impl<'a> PreparedScene<'a> {
             }
         }
         let mut sample_bytes = 4;
-        let sampled = match options.sampling {
-            None => None,
+        if let Some(sampling) = options.sampling {
+            // A tile's samples: its rows and the filter's overlap above and below.
+            let row_bytes = options.width as u64 * sampling.count() as u64 * SAMPLE_WORDS as u64 * 4;
+            let overlap = 2 * sampling.radius() as u64;
+            let budget = gpu.limits.max_storage_buffer_binding_size.min(gpu.limits.max_buffer_size);
+            if row_bytes * (1 + overlap) > budget {
+                return Err(GpuError::Unsupported(super::support::UnsupportedError {
+                    file: scene.path.clone(),
+                    location: None,
+                    what: format!(
+                        "{} {} at {} pixels across: one row of samples and the filter's {overlap} rows around it exceed the adapter's storage binding limit of {budget} bytes",
+                        sampling.sampler.flag(),
+                        sampling.count(),
+                        options.width
+                    ),
+                }));
+            }
+            let rows = (MAX_SAMPLE_BYTES.min(budget) / row_bytes).saturating_sub(overlap).max(1);
+            tile_rows = tile_rows.min(rows as u32);
+            sample_bytes = row_bytes * (tile_rows as u64 + overlap).min(options.height as u64);
+        }
+        let traced_rows = match options.sampling {
+            Some(sampling) => (tile_rows + 2 * sampling.radius()).min(options.height),
+            None => tile_rows,
+        };
+        let band_bytes = buffers.bins.as_ref().map(|b| band_bytes(b, traced_rows, limit)).transpose()?;
+        // The kernels are compiled (on lavapipe about 18 ms for bunny_40k's, even from the
+        // shader cache, while the other core waits) while this thread orders the bins'
+        // lists, uploads the scene and fills the first tile's lists. A sampled render
+        // dispatches its samples and filter kernels only.
+        let compile = || match options.sampling {
+            None => (Some(gpu.pipeline(config, &bindings)), None),
             Some(sampling) => {
-                // A tile's samples: its rows and the filter's overlap above and below.
-                let row_bytes = options.width as u64 * sampling.count() as u64 * SAMPLE_WORDS as u64 * 4;
-                let overlap = 2 * sampling.radius() as u64;
-                let budget = gpu.limits.max_storage_buffer_binding_size.min(gpu.limits.max_buffer_size);
-                if row_bytes * (1 + overlap) > budget {
-                    return Err(GpuError::Unsupported(super::support::UnsupportedError {
-                        file: scene.path.clone(),
-                        location: None,
-                        what: format!(
-                            "{} {} at {} pixels across: one row of samples and the filter's {overlap} rows around it exceed the adapter's storage binding limit of {budget} bytes",
-                            sampling.sampler.flag(),
-                            sampling.count(),
-                            options.width
-                        ),
-                    }));
-                }
-                let rows = (MAX_SAMPLE_BYTES.min(budget) / row_bytes).saturating_sub(overlap).max(1);
-                tile_rows = tile_rows.min(rows as u32);
-                sample_bytes = row_bytes * (tile_rows as u64 + overlap).min(options.height as u64);
                 let stage = |stage| gpu.pipeline(KernelConfig { stage, ..config }, &bindings);
-                Some(Sampled { sampling, samples: stage(Stage::Samples), filter: stage(Stage::Filter) })
+                (None, Some(Sampled { sampling, samples: stage(Stage::Samples), filter: stage(Stage::Filter) }))
             }
         };
+        let upload = || {
+            if let Some(bins) = &mut buffers.bins {
+                bins.finish(&buffers.triangles);
+            }
+            let inputs = upload_inputs(gpu, &buffers)?;
+            // The first tile of a whole image (a band of a split render may start lower):
+            // the rows `PreparedScene::traced_rows` gives it.
+            let first_tile_rows = tile_rows.min(options.height);
+            let first_traced = options
+                .sampling
+                .map_or(first_tile_rows, |sampling| (first_tile_rows + sampling.radius()).min(options.height));
+            let first_band = buffers.bins.as_ref().map(|bins| {
+                let (first, count) = Bins::rows_holding(0, first_traced);
+                (first, count, bins.band(first, count))
+            });
+            Ok::<_, GpuError>((inputs, first_band))
+        };
+        let ((pipeline, sampled), uploaded) = in_parallel(compile, upload);
+        let (inputs, first_band) = uploaded?;
         let tiles = options.height.div_ceil(tile_rows);
         let tile_bytes = options.width as u64 * tile_rows as u64 * layout.words() as u64 * 4;
         let counters = Counters::new(gpu, options.stats);
         let acceleration = buffers.acceleration();
         let bins = buffers.bins.take();
-        let traced_rows = match options.sampling {
-            Some(sampling) => (tile_rows + 2 * sampling.radius()).min(options.height),
-            None => tile_rows,
-        };
-        let band_bytes = bins.as_ref().map(|b| band_bytes(b, traced_rows, limit)).transpose()?;
         let slots: Vec<Slot> = (0..tiles.min(2))
             .map(|_| {
                 let sizes = SlotSizes { tile_bytes, sample_bytes, band_bytes };
@@ -229,6 +254,7 @@ impl<'a> PreparedScene<'a> {
             counters,
             sampled,
             bins,
+            first_band: std::sync::Mutex::new(first_band),
         })
     }
 
@@ -424,7 +450,11 @@ impl<'a> PreparedScene<'a> {
     fn upload_band(&self, slot: &Slot, first_row: u32, rows: u32) -> u32 {
         let (Some(bins), Some(buffers)) = (&self.bins, &slot.bins) else { return 0 };
         let (first, count) = Bins::rows_holding(first_row, rows);
-        let band = bins.band(first, count);
+        let prepared = self.first_band.lock().unwrap_or_else(|e| e.into_inner()).take();
+        let band = match prepared {
+            Some((f, c, band)) if (f, c) == (first, count) => band,
+            _ => bins.band(first, count),
+        };
         let queue = &self.gpu.queue;
         queue.write_buffer(&buffers.ranges, 0, bytemuck::cast_slice(&band.ranges));
         if !band.items.is_empty() {
@@ -703,6 +733,22 @@ fn non_empty<T: bytemuck::Pod>(items: &[T]) -> &[u8] {
     } else {
         bytemuck::cast_slice(items)
     }
+}
+
+/// `a` and `b` at once, `a` on a thread of its own, where there are threads; in a browser
+/// one after the other.
+#[cfg(not(target_arch = "wasm32"))]
+fn in_parallel<A: Send, B>(a: impl FnOnce() -> A + Send, b: impl FnOnce() -> B) -> (A, B) {
+    std::thread::scope(|scope| {
+        let a = scope.spawn(a);
+        let b = b();
+        (a.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic)), b)
+    })
+}
+
+#[cfg(target_arch = "wasm32")]
+fn in_parallel<A, B>(a: impl FnOnce() -> A, b: impl FnOnce() -> B) -> (A, B) {
+    (a(), b())
 }
 
 /// Maps `slice` for reading once `submission` is done, blocking until it is.
