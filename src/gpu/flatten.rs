@@ -60,6 +60,10 @@ pub const SAMPLED_BINS_MIN_PIXELS: u64 = 1 << 18;
 /// hierarchy.
 pub const BINS_MAX_MEAN_LIST: f64 = 64.0;
 
+/// The most primitives a hierarchy is built for: a reference keeps its index in the bits
+/// below [`REF_KIND_SHIFT`].
+const BVH_MAX_PRIMITIVES: usize = 1 << REF_KIND_SHIFT;
+
 /// lavapipe ends an invocation's loops after this many iterations in all (a guard of its
 /// compiler against endless loops; docs/lavapipe.md), so no loop of ours may come near it:
 /// bins whose longest list does go to the hierarchy, and flat loops over more primitives
@@ -92,18 +96,17 @@ impl SceneBuffers {
         sampled: bool,
         grid: Option<GridChoice>,
     ) -> SceneBuffers {
+        let mut buffers = SceneBuffers::flattened(scene, rays);
+        buffers.build_acceleration(rays, options, no_bins, sampled, grid);
+        buffers
+    }
+
+    /// [`SceneBuffers::new`] without its way of finding candidates (no bins, hierarchy or
+    /// grid yet: [`SceneBuffers::build_acceleration`]).
+    pub fn flattened(scene: &Scene, rays: &PrimaryRays) -> SceneBuffers {
         let mut buffers = SceneBuffers { orthographic: rays.orthographic, ..Default::default() };
         let to_camera = DMat4::from_translation(-rays.center);
         buffers.flatten(&scene.root, &to_camera);
-        match grid {
-            // An explicit grid means the grid (docs/SPEC.md §7).
-            Some(GridChoice::Walk(size)) => buffers.grid = Some(GpuGrid::build(&buffers, size)),
-            Some(GridChoice::Given(grid)) => buffers.grid = Some(grid),
-            None => buffers.choose_acceleration(rays, options, no_bins, sampled),
-        }
-        if let Some(bvh) = buffers.bvh.as_ref().filter(|b| b.prim_refs.is_empty()) {
-            buffers.triangles = bvh.order.iter().map(|&p| buffers.triangles[p as usize]).collect();
-        }
         buffers.materials = scene.materials.iter().map(GpuMaterial::new).collect();
         if scene.has_textures() {
             buffers.textures = (0..scene.materials.len() as u32)
@@ -123,15 +126,60 @@ impl SceneBuffers {
             num_ellipsoids: buffers.ellipsoids.len() as u32,
             num_planes: buffers.planes.len() as u32,
             num_triangles: buffers.triangles.len() as u32,
-            bin_columns: buffers.bins.as_ref().map_or(0, |b| b.columns),
             loop_canary_trips: LOOP_CANARY_TRIPS,
             ..Default::default()
         };
-        if let Some(grid) = &buffers.grid {
-            [buffers.params.grid_nx, buffers.params.grid_ny, buffers.params.grid_nz] = grid.size;
-            (buffers.params.grid_min, buffers.params.grid_cell) = (grid.min, grid.cell);
-        }
         buffers
+    }
+
+    /// What [`SceneBuffers::build_acceleration`] will build, without building it: exact,
+    /// but for [`Acceleration::Bins`], which the bins' list lengths may still turn down for
+    /// the hierarchy. (So the kernel for it can be compiled while they are built.)
+    pub fn planned_acceleration(
+        &self,
+        rays: &PrimaryRays,
+        options: &GpuOptions,
+        no_bins: bool,
+        sampled: bool,
+        grid: bool,
+    ) -> Acceleration {
+        if grid {
+            return Acceleration::Grid;
+        }
+        let Some(bins_asked) = self.bins_asked(rays, options, sampled) else { return Acceleration::Flat };
+        if bins_asked && !no_bins {
+            return Acceleration::Bins;
+        }
+        match self.finite() >= self.bvh_min_primitives(options).max(1) && self.finite() <= BVH_MAX_PRIMITIVES {
+            true => Acceleration::Hierarchy,
+            false => Acceleration::Flat,
+        }
+    }
+
+    /// Builds the grid (`grid`: `-grid`), or else bins, a hierarchy or nothing (flat
+    /// loops), as [`SceneBuffers::new`] says.
+    pub fn build_acceleration(
+        &mut self,
+        rays: &PrimaryRays,
+        options: &GpuOptions,
+        no_bins: bool,
+        sampled: bool,
+        grid: Option<GridChoice>,
+    ) {
+        match grid {
+            // An explicit grid means the grid (docs/SPEC.md §7).
+            Some(GridChoice::Walk(size)) => self.grid = Some(GpuGrid::build(self, size)),
+            Some(GridChoice::Given(grid)) => self.grid = Some(grid),
+            None => self.choose_acceleration(rays, options, no_bins, sampled),
+        }
+        if let Some(bvh) = self.bvh.as_ref().filter(|b| b.prim_refs.is_empty()) {
+            self.triangles = bvh.order.iter().map(|&p| self.triangles[p as usize]).collect();
+        }
+        self.params.bin_columns = self.bins.as_ref().map_or(0, |b| b.columns);
+        if let Some(grid) = &self.grid {
+            [self.params.grid_nx, self.params.grid_ny, self.params.grid_nz] = grid.size;
+            (self.params.grid_min, self.params.grid_cell) = (grid.min, grid.cell);
+        }
     }
 
     /// The box the `-grid`'s cells divide, in world space (the camera's centre added back),
@@ -158,20 +206,7 @@ impl SceneBuffers {
     /// [`Acceleration::Auto`] the cost model's choice; with `no_bins`, the hierarchy
     /// where bins were asked for.
     fn choose_acceleration(&mut self, rays: &PrimaryRays, options: &GpuOptions, no_bins: bool, sampled: bool) {
-        let finite = self.triangles.len() + self.spheres.len() + self.ellipsoids.len();
-        let auto = options.acceleration == Acceleration::Auto;
-        if finite == 0 || options.acceleration == Acceleration::Flat || (auto && finite < options.bvh_min_primitives) {
-            return;
-        }
-        // `auto` tries bins at every size for one ray a pixel: their kernel, without loops
-        // over its rays, compiles faster than the hierarchy's (cold shader cache, 200²:
-        // bunny_1k 86 against 193 ms of rendering), and building bins costs less than building
-        // the hierarchy (bunny_40k at 16²: 2.2 against 13.8 ms), so even a 16² image is
-        // quicker with them (35.0 against 42.3 ms of rendering). Samples take bins from
-        // SAMPLED_BINS_MIN_PIXELS on. Long lists still go to the hierarchy, below.
-        let pixels = rays.width as u64 * rays.height as u64;
-        let bins_asked =
-            options.acceleration == Acceleration::Bins || (auto && (!sampled || pixels >= SAMPLED_BINS_MIN_PIXELS));
+        let Some(bins_asked) = self.bins_asked(rays, options, sampled) else { return };
         if bins_asked && !no_bins {
             let candidates = binning::candidates(&self.triangles, &self.sphere_bounds, &self.ellipsoid_bounds);
             let forced = options.acceleration == Acceleration::Bins;
@@ -184,13 +219,43 @@ impl SceneBuffers {
                 return;
             }
         }
-        let min_primitives = if auto { options.bvh_min_primitives } else { 1 };
-        self.bvh = self.build_bvh(min_primitives);
+        self.bvh = self.build_bvh(self.bvh_min_primitives(options));
+    }
+
+    /// Spheres, ellipsoids and triangles: what bins and the hierarchy hold.
+    fn finite(&self) -> usize {
+        self.triangles.len() + self.spheres.len() + self.ellipsoids.len()
+    }
+
+    /// The fewest primitives a hierarchy is built for: `auto`'s threshold, else one.
+    fn bvh_min_primitives(&self, options: &GpuOptions) -> usize {
+        if options.acceleration == Acceleration::Auto {
+            options.bvh_min_primitives
+        } else {
+            1
+        }
+    }
+
+    /// Whether bins are asked for; `None` where flat loops are, with nothing else tried.
+    fn bins_asked(&self, rays: &PrimaryRays, options: &GpuOptions, sampled: bool) -> Option<bool> {
+        let finite = self.finite();
+        let auto = options.acceleration == Acceleration::Auto;
+        if finite == 0 || options.acceleration == Acceleration::Flat || (auto && finite < options.bvh_min_primitives) {
+            return None;
+        }
+        // `auto` tries bins at every size for one ray a pixel: their kernel, without loops
+        // over its rays, compiles faster than the hierarchy's (cold shader cache, 200²:
+        // bunny_1k 86 against 193 ms of rendering), and building bins costs less than building
+        // the hierarchy (bunny_40k at 16²: 2.2 against 13.8 ms), so even a 16² image is
+        // quicker with them (35.0 against 42.3 ms of rendering). Samples take bins from
+        // SAMPLED_BINS_MIN_PIXELS on. Long lists still go to the hierarchy, below.
+        let pixels = rays.width as u64 * rays.height as u64;
+        Some(options.acceleration == Acceleration::Bins || (auto && (!sampled || pixels >= SAMPLED_BINS_MIN_PIXELS)))
     }
 
     fn build_bvh(&self, min_primitives: usize) -> Option<GpuBvh> {
-        let finite = self.triangles.len() + self.spheres.len() + self.ellipsoids.len();
-        if finite < min_primitives.max(1) || finite > (1 << 30) {
+        let finite = self.finite();
+        if finite < min_primitives.max(1) || finite > BVH_MAX_PRIMITIVES {
             return None;
         }
         let start = Instant::now();

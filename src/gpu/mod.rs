@@ -195,11 +195,13 @@ pub enum Stage {
 }
 
 impl KernelConfig {
-    /// The kernel for `buffers`, flattened from a scene whose ray tree is `tree`, on a
+    /// The kernel for `buffers`, flattened from a scene whose ray tree is `tree`, that finds
+    /// candidates by `acceleration` (never `Auto`: what the buffers hold, or will), on a
     /// driver with (`loop_limit`) or without a loop limit, whose subgroups can share a bin's
     /// loads (`shared_loads`, [`GpuRenderer::shares_bin_loads`]) or not.
     pub fn new(
         buffers: &SceneBuffers,
+        acceleration: Acceleration,
         pixel_layout: PixelLayout,
         options: &RenderOptions,
         tree: &tree::TreeShape,
@@ -226,10 +228,10 @@ impl KernelConfig {
             loop_canary: false,
             triangle_test: options.triangle_test,
             sphere_test: options.sphere_test,
-            use_bvh: buffers.bvh.is_some(),
-            use_bins: buffers.bins.is_some(),
+            use_bvh: acceleration == Acceleration::Hierarchy,
+            use_bins: acceleration == Acceleration::Bins,
             shared_bin_loads: false,
-            use_grid: buffers.grid.is_some(),
+            use_grid: acceleration == Acceleration::Grid,
             textures: !buffers.textures.is_empty(),
             stats: options.stats,
             voxels: options.visualize_grid,
@@ -614,34 +616,36 @@ impl GpuRenderer {
     }
 
     fn pipeline(&self, config: KernelConfig, bindings: &bindings::BindingSet) -> wgpu::ComputePipeline {
-        let mut cache = self.pipelines.lock().unwrap_or_else(|e| e.into_inner());
         let key = (config, bindings.mask);
+        let cache = || self.pipelines.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(pipeline) = cache().get(&key) {
+            return pipeline.clone();
+        }
+        // Compiled without the cache's lock, so that two threads compile two kernels at once
+        // (PreparedScene::new: a planned kernel and the one needed instead).
+        let module = self.device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("raycast"),
+            source: specialise::shader_source(Self::kernel(config)),
+        });
+        let pipeline = self.device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("raycast"),
+            layout: Some(&bindings.pipeline),
+            module: &module,
+            entry_point: Some(config.entry_point()),
+            compilation_options: wgpu::PipelineCompilationOptions {
+                // Fixed already, by specialise.
+                constants: &[],
+                zero_initialize_workgroup_memory: false,
+            },
+            cache: None,
+        });
+        let mut cache = cache();
         // A compiled kernel holds megabytes on lavapipe; a process that renders many kinds
         // of scene (the random-scene test: hundreds) starts over rather than keep them all.
         if cache.len() >= MAX_CACHED_PIPELINES && !cache.contains_key(&key) {
             cache.clear();
         }
-        cache
-            .entry(key)
-            .or_insert_with(|| {
-                let module = self.device.create_shader_module(wgpu::ShaderModuleDescriptor {
-                    label: Some("raycast"),
-                    source: specialise::shader_source(Self::kernel(config)),
-                });
-                self.device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                    label: Some("raycast"),
-                    layout: Some(&bindings.pipeline),
-                    module: &module,
-                    entry_point: Some(config.entry_point()),
-                    compilation_options: wgpu::PipelineCompilationOptions {
-                        // Fixed already, by specialise.
-                        constants: &[],
-                        zero_initialize_workgroup_memory: false,
-                    },
-                    cache: None,
-                })
-            })
-            .clone()
+        cache.entry(key).or_insert(pipeline).clone()
     }
 
     /// How many image rows one dispatch renders: as many as fit the adapter's storage

@@ -116,101 +116,55 @@ impl<'a> PreparedScene<'a> {
             true => GridChoice::Given(super::voxels::voxel_grid(scene, size, rays.center)),
             false => GridChoice::Walk(size),
         });
-        let mut buffers =
-            SceneBuffers::new(scene, &rays, &gpu.options, secondary_rays, options.sampling.is_some(), grid);
+        let sampled_rays = options.sampling.is_some();
+        let mut buffers = SceneBuffers::flattened(scene, &rays);
         if let Some(sampling) = options.sampling {
             let samples = super::texture_range::checker_samples_per_pixel(&sampling) as f32;
             for texture in buffers.textures.iter_mut().filter(|t| t.kind == GpuTexture::CHECKERBOARD) {
                 texture.reach /= samples;
             }
         }
-        let flat = buffers.bins.is_none() && buffers.bvh.is_none() && buffers.grid.is_none();
-        let primitives =
-            buffers.spheres.len() + buffers.ellipsoids.len() + buffers.planes.len() + buffers.triangles.len();
-        if flat && primitives > super::flatten::LOOP_LIMIT as usize / 2 {
-            return Err(GpuError::TooLarge(format!(
-                "{primitives} primitives in flat loops (at most {} without bins or a hierarchy)",
-                super::flatten::LOOP_LIMIT / 2
-            )));
-        }
-        let config =
-            KernelConfig::new(&buffers, layout, options, &tree, gpu.loop_limit().is_some(), gpu.shares_bin_loads());
-        let stages = match options.sampling {
-            None => vec![config],
-            Some(_) => {
-                [Stage::Pixels, Stage::Samples, Stage::Filter].map(|stage| KernelConfig { stage, ..config }).to_vec()
-            }
+        let config_for = |buffers: &SceneBuffers, acceleration| {
+            let (loop_limit, shared_loads) = (gpu.loop_limit().is_some(), gpu.shares_bin_loads());
+            KernelConfig::new(buffers, acceleration, layout, options, &tree, loop_limit, shared_loads)
         };
-        let bindings = gpu.bindings_for(&stages, &scene.path)?;
-        let mut tile_rows = gpu.tile_rows(options.width, &layout)?;
-        let limit = gpu.limits.max_storage_buffer_binding_size;
-        if let Some(bins) = &buffers.bins {
-            // Where primitives crowd every bin, fewer rows a tile keep its band's lists within
-            // a binding (scenes/hard/closed_mesh_inside.txt, a mesh around the camera whose
-            // triangles all reach the eye plane, bins forced: 151 MiB for all 200 rows).
-            let radius = options.sampling.map_or(0, |s| s.radius());
-            let fits = |rows: u32| band_bytes(bins, (rows + 2 * radius).min(options.height), limit).is_ok();
-            while tile_rows > 1 && !fits(tile_rows) {
-                tile_rows /= 2;
+        // The kernel is compiled (on lavapipe about 18 ms for bunny_40k's, even from the
+        // shader cache, while the machine's other core waited) while this thread builds the
+        // bins or the hierarchy, uploads the scene and fills the first tile's lists. It is
+        // the kernel of the planned way of finding candidates: exact but for bins, whose
+        // lists may turn out too long; then the hierarchy's kernel is compiled here.
+        let planned = buffers.planned_acceleration(&rays, &gpu.options, secondary_rays, sampled_rays, grid.is_some());
+        let planned_config = config_for(&buffers, planned);
+        let prepare = || {
+            buffers.build_acceleration(&rays, &gpu.options, secondary_rays, sampled_rays, grid);
+            let flat = buffers.bins.is_none() && buffers.bvh.is_none() && buffers.grid.is_none();
+            let primitives =
+                buffers.spheres.len() + buffers.ellipsoids.len() + buffers.planes.len() + buffers.triangles.len();
+            if flat && primitives > super::flatten::LOOP_LIMIT as usize / 2 {
+                return Err(GpuError::TooLarge(format!(
+                    "{primitives} primitives in flat loops (at most {} without bins or a hierarchy)",
+                    super::flatten::LOOP_LIMIT / 2
+                )));
             }
-        }
-        let mut sample_bytes = 4;
-        if let Some(sampling) = options.sampling {
-            // A tile's samples: its rows and the filter's overlap above and below.
-            let row_bytes = options.width as u64 * sampling.count() as u64 * SAMPLE_WORDS as u64 * 4;
-            let overlap = 2 * sampling.radius() as u64;
-            let budget = gpu.limits.max_storage_buffer_binding_size.min(gpu.limits.max_buffer_size);
-            if row_bytes * (1 + overlap) > budget {
-                return Err(GpuError::Unsupported(super::support::UnsupportedError {
-                    file: scene.path.clone(),
-                    location: None,
-                    what: format!(
-                        "{} {} at {} pixels across: one row of samples and the filter's {overlap} rows around it exceed the adapter's storage binding limit of {budget} bytes",
-                        sampling.sampler.flag(),
-                        sampling.count(),
-                        options.width
-                    ),
-                }));
-            }
-            let rows = (MAX_SAMPLE_BYTES.min(budget) / row_bytes).saturating_sub(overlap).max(1);
-            tile_rows = tile_rows.min(rows as u32);
-            sample_bytes = row_bytes * (tile_rows as u64 + overlap).min(options.height as u64);
-        }
-        let traced_rows = match options.sampling {
-            Some(sampling) => (tile_rows + 2 * sampling.radius()).min(options.height),
-            None => tile_rows,
-        };
-        let band_bytes = buffers.bins.as_ref().map(|b| band_bytes(b, traced_rows, limit)).transpose()?;
-        // The kernels are compiled (on lavapipe about 18 ms for bunny_40k's, even from the
-        // shader cache, while the other core waits) while this thread orders the bins'
-        // lists, uploads the scene and fills the first tile's lists. A sampled render
-        // dispatches its samples and filter kernels only.
-        let compile = || match options.sampling {
-            None => (Some(gpu.pipeline(config, &bindings)), None),
-            Some(sampling) => {
-                let stage = |stage| gpu.pipeline(KernelConfig { stage, ..config }, &bindings);
-                (None, Some(Sampled { sampling, samples: stage(Stage::Samples), filter: stage(Stage::Filter) }))
-            }
-        };
-        let upload = || {
+            let tiling = Tiling::new(gpu, scene, options, &layout, buffers.bins.as_ref())?;
             if let Some(bins) = &mut buffers.bins {
                 bins.finish(&buffers.triangles);
             }
             let inputs = upload_inputs(gpu, &buffers)?;
-            // The first tile of a whole image (a band of a split render may start lower):
-            // the rows `PreparedScene::traced_rows` gives it.
-            let first_tile_rows = tile_rows.min(options.height);
-            let first_traced = options
-                .sampling
-                .map_or(first_tile_rows, |sampling| (first_tile_rows + sampling.radius()).min(options.height));
             let first_band = buffers.bins.as_ref().map(|bins| {
-                let (first, count) = Bins::rows_holding(0, first_traced);
+                let (first, count) = Bins::rows_holding(0, tiling.first_traced_rows(options));
                 (first, count, bins.band(first, count))
             });
-            Ok::<_, GpuError>((inputs, first_band))
+            // The plan failed (the bins' lists were too long): the kernel that is needed,
+            // compiled here at once, not after the other.
+            let config = config_for(&buffers, buffers.acceleration());
+            let unplanned = (config != planned_config).then(|| Compiled::new(gpu, config, options, &scene.path));
+            Ok((config, unplanned, tiling, inputs, first_band))
         };
-        let ((pipeline, sampled), uploaded) = in_parallel(compile, upload);
-        let (inputs, first_band) = uploaded?;
+        let (planned, prepared) = in_parallel(|| Compiled::new(gpu, planned_config, options, &scene.path), prepare);
+        let (config, unplanned, tiling, inputs, first_band) = prepared?;
+        let Compiled { bindings, pipeline, sampled } = unplanned.unwrap_or(planned)?;
+        let Tiling { tile_rows, sample_bytes, band_bytes, .. } = tiling;
         let tiles = options.height.div_ceil(tile_rows);
         let tile_bytes = options.width as u64 * tile_rows as u64 * layout.words() as u64 * 4;
         let counters = Counters::new(gpu, options.stats);
@@ -528,6 +482,106 @@ impl<'a> PreparedScene<'a> {
             timer.resolve(&mut encoder);
         }
         gpu.queue.submit([encoder.finish()])
+    }
+}
+
+/// A kernel's bindings and pipelines: the pixels kernel of a render without sampling, the
+/// samples and filter kernels of one with it.
+struct Compiled {
+    bindings: BindingSet,
+    pipeline: Option<wgpu::ComputePipeline>,
+    sampled: Option<Sampled>,
+}
+
+impl Compiled {
+    fn new(
+        gpu: &GpuRenderer,
+        config: KernelConfig,
+        options: &RenderOptions,
+        file: &std::path::Path,
+    ) -> Result<Compiled, GpuError> {
+        let stages = match options.sampling {
+            None => vec![config],
+            Some(_) => {
+                [Stage::Pixels, Stage::Samples, Stage::Filter].map(|stage| KernelConfig { stage, ..config }).to_vec()
+            }
+        };
+        let bindings = gpu.bindings_for(&stages, file)?;
+        // A sampled render dispatches its samples and filter kernels only.
+        let (pipeline, sampled) = match options.sampling {
+            None => (Some(gpu.pipeline(config, &bindings)), None),
+            Some(sampling) => {
+                let stage = |stage| gpu.pipeline(KernelConfig { stage, ..config }, &bindings);
+                (None, Some(Sampled { sampling, samples: stage(Stage::Samples), filter: stage(Stage::Filter) }))
+            }
+        };
+        Ok(Compiled { bindings, pipeline, sampled })
+    }
+}
+
+/// How a render is cut into tiles: rows per tile, the bytes of a tile's samples and of its
+/// bins' lists.
+struct Tiling {
+    tile_rows: u32,
+    sample_bytes: u64,
+    band_bytes: Option<(u64, u64)>,
+}
+
+impl Tiling {
+    fn new(
+        gpu: &GpuRenderer,
+        scene: &Scene,
+        options: &RenderOptions,
+        layout: &PixelLayout,
+        bins: Option<&Bins>,
+    ) -> Result<Tiling, GpuError> {
+        let mut tile_rows = gpu.tile_rows(options.width, layout)?;
+        let limit = gpu.limits.max_storage_buffer_binding_size;
+        if let Some(bins) = bins {
+            // Where primitives crowd every bin, fewer rows a tile keep its band's lists within
+            // a binding (scenes/hard/closed_mesh_inside.txt, a mesh around the camera whose
+            // triangles all reach the eye plane, bins forced: 151 MiB for all 200 rows).
+            let radius = options.sampling.map_or(0, |s| s.radius());
+            let fits = |rows: u32| band_bytes(bins, (rows + 2 * radius).min(options.height), limit).is_ok();
+            while tile_rows > 1 && !fits(tile_rows) {
+                tile_rows /= 2;
+            }
+        }
+        let mut sample_bytes = 4;
+        if let Some(sampling) = options.sampling {
+            // A tile's samples: its rows and the filter's overlap above and below.
+            let row_bytes = options.width as u64 * sampling.count() as u64 * SAMPLE_WORDS as u64 * 4;
+            let overlap = 2 * sampling.radius() as u64;
+            let budget = gpu.limits.max_storage_buffer_binding_size.min(gpu.limits.max_buffer_size);
+            if row_bytes * (1 + overlap) > budget {
+                return Err(GpuError::Unsupported(super::support::UnsupportedError {
+                    file: scene.path.clone(),
+                    location: None,
+                    what: format!(
+                        "{} {} at {} pixels across: one row of samples and the filter's {overlap} rows around it exceed the adapter's storage binding limit of {budget} bytes",
+                        sampling.sampler.flag(),
+                        sampling.count(),
+                        options.width
+                    ),
+                }));
+            }
+            let rows = (MAX_SAMPLE_BYTES.min(budget) / row_bytes).saturating_sub(overlap).max(1);
+            tile_rows = tile_rows.min(rows as u32);
+            sample_bytes = row_bytes * (tile_rows as u64 + overlap).min(options.height as u64);
+        }
+        let traced_rows = match options.sampling {
+            Some(sampling) => (tile_rows + 2 * sampling.radius()).min(options.height),
+            None => tile_rows,
+        };
+        let band_bytes = bins.map(|b| band_bytes(b, traced_rows, limit)).transpose()?;
+        Ok(Tiling { tile_rows, sample_bytes, band_bytes })
+    }
+
+    /// The rows the first tile of a whole image traces (a band of a split render may start
+    /// lower): those `PreparedScene::traced_rows` gives it.
+    fn first_traced_rows(&self, options: &RenderOptions) -> u32 {
+        let rows = self.tile_rows.min(options.height);
+        options.sampling.map_or(rows, |sampling| (rows + sampling.radius()).min(options.height))
     }
 }
 
