@@ -4,7 +4,7 @@
 //! # The contract
 //!
 //! The kernel rounds every input to f32 and works on camera-relative values (the host moves
-//! the camera to the origin first, [`super::buffers`]). Rounding to f32 costs a relative
+//! the camera to the origin first, [`super::flatten`]). Rounding to f32 costs a relative
 //! 2⁻²⁴ per operation, which the accuracy tests measure; what it cannot absorb is leaving
 //! f32's range. A value beyond f32's largest (≈ 2¹²⁸), or a product the kernel forms that
 //! overflows, becomes infinity or NaN; one that underflows becomes subnormal or zero

@@ -110,7 +110,7 @@ pub fn source() -> &'static str {
 }
 
 /// [`source`] parsed into naga's IR, once per process: what
-/// [`super::specialise::specialise`] cuts down for each kernel.
+/// `specialise::specialise` cuts down for each kernel.
 pub fn module() -> &'static naga::Module {
     static MODULE: OnceLock<naga::Module> = OnceLock::new();
     MODULE.get_or_init(|| super::specialise::parse(source()))
