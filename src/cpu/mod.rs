@@ -15,7 +15,7 @@ pub mod texture;
 
 pub use intersect::{intersect_plane, intersect_sphere, intersect_triangle, sphere_normal, triangle_normal};
 pub use prepared::{Hit, ReferenceScene, SceneGrid, Surface};
-// `refract` is defined below and public for the analytic tests.
+// `refract` and `spawn_origin` are defined below and public for the tests.
 
 use crate::camera::{PrimaryRays, Ray};
 use crate::render::{Frame, Output, Pixel, RayStats, RenderOptions};
@@ -493,7 +493,7 @@ pub fn refract(d: DVec3, n: DVec3, from: f64, into: f64) -> Option<DVec3> {
 /// is 2⁻³² · max(1, |p|∞), over 2⁷ times that bound for any scene whose coordinates are
 /// within 2¹⁴ of the hit point's magnitude, and still 2⁻³² relative: no visible gap. A ray
 /// leaving at less than 1/1024 to the surface moves 1024 times the offset along itself.
-fn spawn_origin(p: DVec3, side: DVec3, d: DVec3) -> DVec3 {
+pub fn spawn_origin(p: DVec3, side: DVec3, d: DVec3) -> DVec3 {
     const RELATIVE: f64 = 1.0 / 4_294_967_296.0; // 2⁻³²
     let away = d.dot(side).max(1.0 / 1024.0);
     p + d * (RELATIVE * p.abs().max_element().max(1.0) / away)

@@ -150,7 +150,7 @@ impl SceneBuffers {
         if bins_asked && !no_bins {
             return Acceleration::Bins;
         }
-        match self.finite() >= self.bvh_min_primitives(options).max(1) && self.finite() <= BVH_MAX_PRIMITIVES {
+        match self.holds_a_hierarchy(self.bvh_min_primitives(options)) {
             true => Acceleration::Hierarchy,
             false => Acceleration::Flat,
         }
@@ -260,11 +260,16 @@ impl SceneBuffers {
         Some(options.acceleration == Acceleration::Bins || (auto && (!sampled || pixels >= SAMPLED_BINS_MIN_PIXELS)))
     }
 
+    /// Whether a hierarchy is built for these primitives, from `min_primitives` on.
+    fn holds_a_hierarchy(&self, min_primitives: usize) -> bool {
+        (min_primitives.max(1)..=BVH_MAX_PRIMITIVES).contains(&self.finite())
+    }
+
     fn build_bvh(&self, min_primitives: usize) -> Option<GpuBvh> {
-        let finite = self.finite();
-        if finite < min_primitives.max(1) || finite > BVH_MAX_PRIMITIVES {
+        if !self.holds_a_hierarchy(min_primitives) {
             return None;
         }
+        let finite = self.finite();
         let start = Instant::now();
         let mut bounds = Vec::with_capacity(finite);
         let mut refs = Vec::with_capacity(finite);

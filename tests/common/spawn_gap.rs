@@ -21,7 +21,7 @@
 
 use glam::DVec3;
 use raycaster::camera::{PrimaryRays, Ray};
-use raycaster::cpu::{refract, Hit, ReferenceScene};
+use raycaster::cpu::{refract, spawn_origin, Hit, ReferenceScene};
 use raycaster::render::Shading;
 use raycaster::scene::{for_each_leaf, Light, Scene, Shape};
 
@@ -68,13 +68,11 @@ impl<'a> SpawnGaps<'a> {
         let normal = if facing > 0.0 { -surface.normal } else { surface.normal };
         let scale = self.kernel_scale(ray, surface.point, &hit);
         let spawn = |direction: DVec3, side: DVec3| {
-            // The reference's own start (2⁻³² relative: within rounding of the point) and
-            // the kernel's reach beyond it.
+            // The reference's own start, and the kernel's reach beyond the point (its
+            // offset along the ray grows over the cosine as the reference's does).
             let cosine = direction.dot(side).max(1.0 / 1024.0);
             let reach = 2.0 * KERNEL_SPAWN_OFFSET * scale / cosine;
-            let start =
-                surface.point + direction * (surface.point.abs().max_element().max(1.0) / 4_294_967_296.0 / cosine);
-            (Ray::new(start, direction, 0.0), reach)
+            (Ray::new(spawn_origin(surface.point, side, direction), direction, 0.0), reach)
         };
         if self.shading.shadows {
             for light in &self.scene.lights {
