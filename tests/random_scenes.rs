@@ -800,7 +800,7 @@ fn check(gpu: &GpuRenderer, spec: &SceneSpec, totals: &RefCell<Totals>) -> Resul
     let reference = raycaster::cpu::render(&scene, &options);
     let reference_seconds = start.elapsed().as_secs_f64() - gpu_seconds;
     let errors = compare_frames(&ours, &reference, depth_range_of(&reference));
-    let excused = colour_pixels_within_spawn_gap(&scene, spec, &ours, &reference);
+    let excused = colour_pixels_within_spawn_gap(&scene, spec, &errors, &ours, &reference);
 
     let pixels = options.pixel_count();
     let allowed = pixels / 1000;
@@ -847,10 +847,12 @@ fn check(gpu: &GpuRenderer, spec: &SceneSpec, totals: &RefCell<Totals>) -> Resul
 fn colour_pixels_within_spawn_gap(
     scene: &Scene,
     spec: &SceneSpec,
+    errors: &[OutputErrors],
     ours: &Frame,
     reference: &Frame,
 ) -> Vec<(u32, u32, String)> {
-    if spec.shading.bounces == 0 && !spec.shading.shadows {
+    let colour_off = errors.iter().any(|e| e.output == Output::Color && e.image.off_by_more_than_one > 0);
+    if !colour_off || (spec.shading.bounces == 0 && !spec.shading.shadows) {
         return Vec::new();
     }
     let (a, b) = (color_image(ours), color_image(reference));
