@@ -15,6 +15,7 @@ use std::process::ExitCode;
 /// same way).
 fn main() -> ExitCode {
     give_mesa_a_runtime_dir();
+    split_lavapipe_dispatches_finer();
     match run() {
         Ok(()) => ExitCode::SUCCESS,
         Err(failure) => ExitCode::from(exit::report(&failure)),
@@ -253,6 +254,22 @@ fn notice(lines: &[String]) {
         say(line);
     }
 }
+/// lavapipe (Mesa's CPU Vulkan driver) cuts each dispatch's workgroups into one contiguous
+/// share per thread, a thread per core by default, and the dispatch lasts as long as its
+/// slowest share: bands of an image are not equally busy, and a thread may start late. Two
+/// shares per core let the cores that finish early take up the rest: bunny_40k's kernel at
+/// 512² took 5.4 ms with 2 threads on 2 cores and 3.6 ms with 4 (docs/lavapipe.md, "A
+/// dispatch is cut into one share per thread"). Set before any thread exists, unless the
+/// user chose; on one core lavapipe runs dispatches on the calling thread, and other drivers
+/// do not read it.
+fn split_lavapipe_dispatches_finer() {
+    const LAVAPIPE_THREADS: &str = "LP_NUM_THREADS";
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    if cores > 1 && std::env::var_os(LAVAPIPE_THREADS).is_none() {
+        std::env::set_var(LAVAPIPE_THREADS, (2 * cores).to_string());
+    }
+}
+
 /// Mesa's Vulkan drivers print "XDG_RUNTIME_DIR is invalid or not set" on every start when
 /// the variable is missing (headless machines, CI). Point it at a private folder of ours
 /// before any thread exists, so the message does not bury our own. (A freedesktop variable:
