@@ -123,6 +123,9 @@ enum Encoder {
 
 /// TGA header length (no image id, no colour map).
 const TGA_HEADER: u64 = 18;
+/// Bytes gathered before each write to a TGA file: rows arrive one at a time, and a
+/// system call per 8 KiB (the default) cost a 512² image 96 calls instead of 12.
+const TGA_BUFFER: usize = 64 * 1024;
 
 impl ImageFile {
     /// Starts `path` (format from its extension) for a `width × height` image.
@@ -485,7 +488,7 @@ fn tga_start(file: std::fs::File, width: u32, height: u32) -> std::io::Result<Bu
     header[12..14].copy_from_slice(&w.to_le_bytes());
     header[14..16].copy_from_slice(&h.to_le_bytes());
     header[16] = 24;
-    let mut out = BufWriter::new(file);
+    let mut out = BufWriter::with_capacity(TGA_BUFFER, file);
     out.write_all(&header)?;
     Ok(out)
 }
@@ -495,13 +498,16 @@ fn tga_start(file: std::fs::File, width: u32, height: u32) -> std::io::Result<Bu
 fn tga_rows(out: &mut BufWriter<std::fs::File>, rgb: &[u8], row_bytes: usize, bottom_row: u32) -> std::io::Result<()> {
     use std::io::{Seek, SeekFrom};
     out.seek(SeekFrom::Start(TGA_HEADER + bottom_row as u64 * row_bytes as u64))?;
-    let mut bgr = vec![0u8; rgb.len()];
-    for (to, from) in bgr.chunks_exact_mut(row_bytes).zip(rgb.chunks_exact(row_bytes).rev()) {
-        for (t, f) in to.chunks_exact_mut(3).zip(from.chunks_exact(3)) {
+    // A row at a time through the writer's buffer: no copy of the whole block, whose fresh
+    // pages cost more than the swap itself (a 512² tile: 0.45 against 0.6–0.7 ms).
+    let mut bgr = vec![0u8; row_bytes];
+    for from in rgb.chunks_exact(row_bytes).rev() {
+        for (t, f) in bgr.chunks_exact_mut(3).zip(from.chunks_exact(3)) {
             t.copy_from_slice(&[f[2], f[1], f[0]]);
         }
+        out.write_all(&bgr)?;
     }
-    out.write_all(&bgr)
+    Ok(())
 }
 
 fn png_start(

@@ -371,10 +371,33 @@ pub enum Handover {
 impl PixelLayout {
     /// Whether, and why, the kernel handed over the pixel whose words are `words`.
     pub fn handover(&self, words: &[u32]) -> Option<Handover> {
-        match (self.packed, words[0]) {
-            (true, CUT_SHORT_WORD) | (false, CUT_SHORT_HIT) => Some(Handover::LoopsCut),
-            (true, BEYOND_REACH_WORD) | (false, BEYOND_REACH_HIT) => Some(Handover::BeyondReach),
+        let (cut, beyond) = self.handover_words();
+        match words[0] {
+            w if w == cut => Some(Handover::LoopsCut),
+            w if w == beyond => Some(Handover::BeyondReach),
             _ => None,
+        }
+    }
+
+    /// Whether the kernel handed over any pixel of `words` (whole pixels of this layout).
+    /// Almost every tile hands over none, so this pass has no branch and the compiler
+    /// vectorises it: bunny_40k's 512² tile took 0.66 ms to scan pixel by pixel with
+    /// [`PixelLayout::handover`].
+    pub fn hands_over_any(&self, words: &[u32]) -> bool {
+        let (cut, beyond) = self.handover_words();
+        let marked = |any: bool, &w: &u32| any | (w == cut) | (w == beyond);
+        match self.words() as usize {
+            1 => words.iter().fold(false, marked),
+            stride => words.iter().step_by(stride).fold(false, marked),
+        }
+    }
+
+    /// The first words of a pixel whose loops were cut short and of one beyond a texture's
+    /// reach.
+    fn handover_words(&self) -> (u32, u32) {
+        match self.packed {
+            true => (CUT_SHORT_WORD, BEYOND_REACH_WORD),
+            false => (CUT_SHORT_HIT, BEYOND_REACH_HIT),
         }
     }
 
@@ -482,4 +505,41 @@ pub fn sum_counters(words: &[u32]) -> crate::render::RayStats {
     }
     let [non_shadow_rays, shadow_rays, intersections, cells_traversed] = sums;
     crate::render::RayStats { non_shadow_rays, shadow_rays, intersections, cells_traversed }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every layout: the vectorised scan finds a mark wherever the pixel-by-pixel reading
+    /// finds one, and ignores the mark's value in a pixel's other words (a float colour or
+    /// depth may hold those bits).
+    #[test]
+    fn hands_over_any_agrees_with_handover() {
+        let outputs = [
+            Outputs::from(Output::Color),
+            Outputs::from(Output::Depth),
+            [Output::Color, Output::Normals].into_iter().collect(),
+            [Output::Color, Output::Normals, Output::Depth].into_iter().collect(),
+        ];
+        for (outputs, packed) in outputs.into_iter().flat_map(|o| [(o, true), (o, false)]) {
+            let layout = PixelLayout { outputs, packed };
+            let stride = layout.words() as usize;
+            let pixels = 37;
+            let plain = || -> Vec<u32> { (0..pixels * stride).map(|k| (k as u32 * 2_654_435_761) >> 9).collect() };
+            let by_pixel = |words: &[u32]| (0..pixels).any(|k| layout.handover(&words[k * stride..]).is_some());
+            let words = plain();
+            assert!(!layout.hands_over_any(&words) && !by_pixel(&words), "{layout:?}: nothing marked");
+            let (cut, beyond) = layout.handover_words();
+            for mark in [cut, beyond] {
+                for k in 0..pixels * stride {
+                    let mut words = plain();
+                    words[k] = mark;
+                    let first_word = k % stride == 0;
+                    assert_eq!(layout.hands_over_any(&words), first_word, "{layout:?}: mark {mark:#x} at word {k}");
+                    assert_eq!(by_pixel(&words), first_word, "{layout:?}: mark {mark:#x} at word {k}");
+                }
+            }
+        }
+    }
 }

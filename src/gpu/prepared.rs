@@ -342,6 +342,9 @@ impl<'a> PreparedScene<'a> {
         first_row: u32,
         words: &[u32],
     ) -> Option<(Vec<u32>, HandedOver)> {
+        if !self.layout.hands_over_any(words) {
+            return None;
+        }
         let stride = self.layout.words() as usize;
         let width = self.options.width as usize;
         let (mut cut, mut beyond) = (Vec::new(), Vec::new());
