@@ -56,6 +56,60 @@ fn awaited_tiles_equal_threaded_ones() {
     assert_eq!(frame, small.render(&scene(), &options).unwrap());
 }
 
+/// Where the host maps the kernel's buffers (a CPU adapter: the first tile's bin lists
+/// written while the kernel compiles, each tile read from the output buffer itself), the
+/// tiles hold what copying through staging and readback buffers gives, as on a discrete
+/// GPU: floats and 8-bit words, in tiles of a few rows that two slots take in turn, the whole image
+/// (slot 0's lists written beforehand) and a band of a split render from row 13 (whose first
+/// tile needs other lists than those).
+#[test]
+fn mapped_buffers_give_what_copies_give() {
+    use raycaster::gpu::{Acceleration, GpuRenderer};
+    let Some(gpu) = common::gpu() else { return };
+    let (width, height) = (61, 53);
+    let with = |mapped_buffers| {
+        gpu.on_same_device(GpuOptions {
+            acceleration: Acceleration::Bins,
+            max_tile_bytes: width as u64 * 3 * 32,
+            mapped_buffers,
+            ..GpuOptions::default()
+        })
+    };
+    let (mapped, copied) = (with(true), with(false));
+    assert!(!copied.maps_kernel_buffers());
+    let cpu_adapter = gpu.adapter_info().device_type == wgpu::DeviceType::Cpu;
+    assert_eq!(mapped.maps_kernel_buffers(), cpu_adapter, "{:?}", gpu.adapter_info());
+    let options = RenderOptions::all(width, height);
+    // Every tile's words, as floats and as the 8-bit colour, of rows `first .. first + rows`.
+    let tiles = |g: &GpuRenderer, packed: bool, (first, rows): (u32, u32)| {
+        let mut seen = Vec::new();
+        let prepared = g.prepare(&lattice(), &options, packed).unwrap();
+        prepared
+            .render_band(first, rows, |tile| {
+                let pixels = if packed { tile.color_rgb() } else { color_image(&tile.to_frame()).into_raw() };
+                seen.push((tile.first_row, tile.rows, pixels));
+                Ok::<(), raycaster::gpu::GpuError>(())
+            })
+            .unwrap();
+        seen
+    };
+    // Both ways share how the first tile's lists are written: the reference checks that.
+    let reference = color_image(&raycaster::cpu::render(&lattice(), &options)).into_raw();
+    let row_bytes = width as usize * 3;
+    for packed in [false, true] {
+        for band in [(0, height), (13, 29)] {
+            let (m, c) = (tiles(&mapped, packed, band), tiles(&copied, packed, band));
+            assert!(m.len() >= 3, "two slots take turns: {} tiles", m.len());
+            assert!(m == c, "mapped buffers differ from copies (packed {packed}, rows {band:?})");
+            let rgb: Vec<u8> = m.into_iter().flat_map(|(_, _, p)| p).collect();
+            let expected = &reference[band.0 as usize * row_bytes..(band.0 + band.1) as usize * row_bytes];
+            let off = rgb.iter().zip(expected).filter(|(a, b)| a.abs_diff(**b) > 1).count();
+            assert_eq!(off, 0, "channels off the reference by more than a level (packed {packed}, rows {band:?})");
+            assert!(expected.chunks(3).any(|p| p != &expected[..3]), "rows {band:?} show more than the background");
+        }
+    }
+}
+
 /// The CPU reference by row ranges equals the whole frame.
 #[test]
 fn cpu_rows_equal_one_pass() {

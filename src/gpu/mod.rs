@@ -72,6 +72,10 @@ pub struct GpuOptions {
     /// allows it ([`GpuRenderer::shares_bin_loads`]); false keeps one load per lane
     /// (`main_bins`), as on every other adapter, for tests to compare the two.
     pub shared_bin_loads: bool,
+    /// Let the host map the buffers the kernel binds where the device allows it
+    /// ([`GpuRenderer::maps_kernel_buffers`]); false copies through staging and readback
+    /// buffers, as on a discrete GPU, for tests to compare the two.
+    pub mapped_buffers: bool,
 }
 
 impl Default for GpuOptions {
@@ -81,6 +85,7 @@ impl Default for GpuOptions {
             bvh_min_primitives: flatten::BVH_MIN_PRIMITIVES,
             acceleration: Acceleration::Auto,
             shared_bin_loads: true,
+            mapped_buffers: true,
         }
     }
 }
@@ -122,6 +127,8 @@ pub enum GpuError {
     Device(String),
     #[error("the scene is too large for this GPU: {0}")]
     TooLarge(String),
+    #[error("writing to the GPU's memory failed: {0}")]
+    Upload(String),
     #[error("reading the image back from the GPU failed: {0}")]
     Readback(String),
     #[error("{0}; render it with --backend cpu")]
@@ -461,8 +468,14 @@ impl GpuRenderer {
         let limits = adapter.limits();
         // Kernel time from the GPU's own clock where the adapter offers it (lavapipe does).
         // Subgroups where offered: on lavapipe a bin's lanes share their loads with them
-        // (GpuRenderer::shares_bin_loads).
-        let features = adapter.features() & (wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::SUBGROUP);
+        // (GpuRenderer::shares_bin_loads). Buffers the kernel binds that the host also maps,
+        // where the device's memory is the host's (a CPU adapter): no staging copies
+        // (GpuRenderer::maps_kernel_buffers).
+        let mut wanted = wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::SUBGROUP;
+        if adapter.get_info().device_type == wgpu::DeviceType::Cpu {
+            wanted |= wgpu::Features::MAPPABLE_PRIMARY_BUFFERS;
+        }
+        let features = adapter.features() & wanted;
         let (device, queue) = adapter
             .request_device(&wgpu::DeviceDescriptor {
                 label: Some("raycaster"),
@@ -577,6 +590,16 @@ impl GpuRenderer {
         let info = &self.adapter_info;
         let lavapipe = info.driver.contains("llvmpipe") || info.name.contains("llvmpipe");
         lavapipe.then_some(flatten::LOOP_LIMIT)
+    }
+
+    /// Whether the host maps the buffers the kernel binds (its tiles' pixels, the bins'
+    /// lists, the scene) instead of copying through staging buffers: where the device was
+    /// opened with `MAPPABLE_PRIMARY_BUFFERS`, which [`GpuRenderer::on_adapter`] asks of CPU
+    /// adapters only, and the options allow it. A CPU adapter's memory is the host's, so
+    /// the copies were pure cost (lavapipe: docs/lavapipe.md, "Buffers the host maps"); a
+    /// discrete GPU would read such a buffer across its bus.
+    pub fn maps_kernel_buffers(&self) -> bool {
+        self.options.mapped_buffers && self.device.features().contains(wgpu::Features::MAPPABLE_PRIMARY_BUFFERS)
     }
 
     /// Whether the lanes of a bin's row can share their loads (`main_bins_shared`): the

@@ -48,9 +48,10 @@ pub struct PreparedScene<'a> {
     /// The frame's screen-space bins, whose lists each tile fills for its own band of rows
     /// ([`Bins::band`]) into its slot's buffers.
     bins: Option<Bins>,
-    /// The lists of the first tile of the whole image (its first bin row, bin rows and
-    /// lists), filled while the kernel compiled; taken by that tile.
-    first_band: std::sync::Mutex<Option<(u32, u32, Band)>>,
+    /// The band of bins (its first bin row and bin rows) whose lists slot 0's buffers
+    /// already hold: those of the whole image's first tile, written while the kernel
+    /// compiled; taken by the first tile that runs in slot 0.
+    first_band: std::sync::Mutex<Option<(u32, u32)>>,
 }
 
 /// The `counters` binding: [`STATS_SLOTS`] slots of [`STATS_WORDS`] words, with a buffer to
@@ -67,16 +68,25 @@ struct Sampled {
     filter: wgpu::ComputePipeline,
 }
 
-/// The buffers one tile in flight uses.
+/// The buffers one tile in flight uses, and their bindings.
 struct Slot {
+    buffers: SlotBuffers,
+    bind_group: wgpu::BindGroup,
+}
+
+/// The buffers of a [`Slot`], made before the kernel's bindings are known (while it
+/// compiles).
+struct SlotBuffers {
     params: wgpu::Buffer,
     /// The tile's samples and their parameters (a word each without sampling).
     sampling: wgpu::Buffer,
+    samples: wgpu::Buffer,
     output: wgpu::Buffer,
-    readback: wgpu::Buffer,
+    /// The buffer the output is copied into for the host to read, or `None` where the
+    /// host maps the output itself ([`GpuRenderer::maps_kernel_buffers`]).
+    readback: Option<wgpu::Buffer>,
     /// The lists of the bins the tile's rays walk, where the frame has bins.
     bins: Option<BandBuffers>,
-    bind_group: wgpu::BindGroup,
     timer: Option<Timer>,
 }
 
@@ -151,31 +161,35 @@ impl<'a> PreparedScene<'a> {
                 bins.finish(&buffers.triangles);
             }
             let inputs = upload_inputs(gpu, &buffers)?;
+            // The first tile's lists go straight into slot 0's buffers, and every slot's
+            // buffers are made (and where the host maps them, their pages touched) here
+            // rather than on the way to the first tile.
             let first_band = buffers.bins.as_ref().map(|bins| {
                 let (first, count) = Bins::rows_holding(0, tiling.first_traced_rows(options));
                 (first, count, bins.band(first, count))
             });
+            let tile_bytes = options.width as u64 * tiling.tile_rows as u64 * layout.words() as u64 * 4;
+            let sizes = SlotSizes { tile_bytes, sample_bytes: tiling.sample_bytes, band_bytes: tiling.band_bytes };
+            let slots = options.height.div_ceil(tiling.tile_rows).min(2);
+            let band = first_band.as_ref().map(|(_, _, band)| band);
+            let slot_buffers: Vec<SlotBuffers> =
+                (0..slots).map(|k| SlotBuffers::new(gpu, sizes, band.filter(|_| k == 0))).collect::<Result<_, _>>()?;
+            let first_band = first_band.map(|(first, count, _)| (first, count));
             // The plan failed (the bins' lists were too long): the kernel that is needed,
             // compiled here at once, not after the other.
             let config = config_for(&buffers, buffers.acceleration());
             let unplanned = (config != planned_config).then(|| Compiled::new(gpu, config, options, &scene.path));
-            Ok((config, unplanned, tiling, inputs, first_band))
+            Ok((config, unplanned, tiling, inputs, first_band, slot_buffers))
         };
         let (planned, prepared) = in_parallel(|| Compiled::new(gpu, planned_config, options, &scene.path), prepare);
-        let (config, unplanned, tiling, inputs, first_band) = prepared?;
+        let (config, unplanned, tiling, inputs, first_band, slot_buffers) = prepared?;
         let Compiled { bindings, pipeline, sampled } = unplanned.unwrap_or(planned)?;
-        let Tiling { tile_rows, sample_bytes, band_bytes, .. } = tiling;
-        let tiles = options.height.div_ceil(tile_rows);
-        let tile_bytes = options.width as u64 * tile_rows as u64 * layout.words() as u64 * 4;
+        let Tiling { tile_rows, band_bytes, .. } = tiling;
         let counters = Counters::new(gpu, options.stats);
         let acceleration = buffers.acceleration();
         let bins = buffers.bins.take();
-        let slots: Vec<Slot> = (0..tiles.min(2))
-            .map(|_| {
-                let sizes = SlotSizes { tile_bytes, sample_bytes, band_bytes };
-                Slot::new(gpu, &bindings, &inputs, &counters.buffer, sizes)
-            })
-            .collect();
+        let slots: Vec<Slot> =
+            slot_buffers.into_iter().map(|b| Slot::new(gpu, b, &bindings, &inputs, &counters.buffer)).collect();
         let band_buffer_bytes: u64 = band_bytes.map_or(0, |(r, i)| r + i) * slots.len() as u64;
         let scene_bytes = inputs.iter().flatten().map(|b| b.size()).sum::<u64>() + band_buffer_bytes;
         Ok(PreparedScene {
@@ -283,8 +297,8 @@ impl<'a> PreparedScene<'a> {
         let again = RenderAgain::default();
         for (first_row, rows) in row_tiles(self.options.height, self.tile_rows) {
             let submission = self.submit_tile(0, first_row, rows);
-            let slot = &self.slots[0];
-            map_async(&self.gpu.device, &slot.readback.slice(..self.tile_bytes(rows)), submission.clone()).await?;
+            let slot = &self.slots[0].buffers;
+            map_async(&self.gpu.device, &slot.readable().slice(..self.tile_bytes(rows)), submission.clone()).await?;
             let kernel_ns = match &slot.timer {
                 Some(timer) => Some(timer.elapsed_ns_async(self.gpu, submission).await?),
                 None => None,
@@ -308,7 +322,7 @@ impl<'a> PreparedScene<'a> {
         again: &RenderAgain<'s>,
         on_tile: &mut impl FnMut(&ReadTile) -> Result<(), E>,
     ) -> Result<HandedOver, E> {
-        let readback = &self.slots[slot].readback;
+        let readback = self.slots[slot].buffers.readable();
         let range = readback.slice(..self.tile_bytes(rows));
         let mut handed = HandedOver::default();
         let result = {
@@ -379,13 +393,13 @@ impl<'a> PreparedScene<'a> {
         self.options.width as u64 * rows as u64 * self.layout.words() as u64 * 4
     }
 
-    /// Dispatches one tile into `slot`, copies it to the slot's readback buffer and waits
-    /// until that is mapped; returns the kernel time where the adapter measures it.
+    /// Dispatches one tile into `slot` and waits until the host can read it (mapped);
+    /// returns the kernel time where the adapter measures it.
     #[cfg(not(target_arch = "wasm32"))]
     fn run_tile(&self, slot: usize, first_row: u32, rows: u32) -> Result<Option<u64>, GpuError> {
         let submission = self.submit_tile(slot, first_row, rows);
-        let s = &self.slots[slot];
-        map_and_wait(&self.gpu.device, &s.readback.slice(..self.tile_bytes(rows)), submission)?;
+        let s = &self.slots[slot].buffers;
+        map_and_wait(&self.gpu.device, &s.readable().slice(..self.tile_bytes(rows)), submission)?;
         match &s.timer {
             Some(timer) => Ok(Some(timer.elapsed_ns(&self.gpu.device, self.gpu.queue.get_timestamp_period())?)),
             None => Ok(None),
@@ -401,17 +415,19 @@ impl<'a> PreparedScene<'a> {
         (first, (first_row + rows).saturating_add(radius).min(self.options.height) - first)
     }
 
-    /// Fills the slot's bin buffers with the lists of the bins that hold image rows
-    /// `first_row .. first_row + rows`, where the frame has bins; returns the band's first
-    /// bin row (the kernel's `first_bin_row`).
-    fn upload_band(&self, slot: &Slot, first_row: u32, rows: u32) -> u32 {
-        let (Some(bins), Some(buffers)) = (&self.bins, &slot.bins) else { return 0 };
+    /// Fills slot `slot`'s bin buffers with the lists of the bins that hold image rows
+    /// `first_row .. first_row + rows`, where the frame has bins, unless they hold them
+    /// already; returns the band's first bin row (the kernel's `first_bin_row`).
+    fn upload_band(&self, slot: usize, first_row: u32, rows: u32) -> u32 {
+        let (Some(bins), Some(buffers)) = (&self.bins, &self.slots[slot].buffers.bins) else { return 0 };
         let (first, count) = Bins::rows_holding(first_row, rows);
-        let prepared = self.first_band.lock().unwrap_or_else(|e| e.into_inner()).take();
-        let band = match prepared {
-            Some((f, c, band)) if (f, c) == (first, count) => band,
-            _ => bins.band(first, count),
-        };
+        if slot == 0 {
+            let written = self.first_band.lock().unwrap_or_else(|e| e.into_inner()).take();
+            if written == Some((first, count)) {
+                return first;
+            }
+        }
+        let band = bins.band(first, count);
         let queue = &self.gpu.queue;
         queue.write_buffer(&buffers.ranges, 0, bytemuck::cast_slice(&band.ranges));
         if !band.items.is_empty() {
@@ -420,12 +436,13 @@ impl<'a> PreparedScene<'a> {
         first
     }
 
-    /// Dispatches one tile into `slot` and copies it to the slot's readback buffer.
+    /// Dispatches one tile into `slot`, and copies it to the slot's readback buffer where
+    /// it has one.
     fn submit_tile(&self, slot: usize, first_row: u32, rows: u32) -> wgpu::SubmissionIndex {
         let gpu = self.gpu;
-        let s = &self.slots[slot];
         let (traced_first, traced_rows) = self.traced_rows(first_row, rows);
-        let first_bin_row = self.upload_band(s, traced_first, traced_rows);
+        let first_bin_row = self.upload_band(slot, traced_first, traced_rows);
+        let (s, bind_group) = (&self.slots[slot].buffers, &self.slots[slot].bind_group);
         let params = Params { first_row, tile_rows: rows, first_bin_row, ..self.params };
         gpu.queue.write_buffer(&s.params, 0, bytemuck::bytes_of(&params));
         let size = self.tile_bytes(rows);
@@ -438,7 +455,7 @@ impl<'a> PreparedScene<'a> {
             });
             let mut pass =
                 encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("raycast"), timestamp_writes });
-            pass.set_bind_group(0, &s.bind_group, &[]);
+            pass.set_bind_group(0, bind_group, &[]);
             let columns = self.options.width.div_ceil(WORKGROUP);
             match &self.sampled {
                 None => {
@@ -480,7 +497,9 @@ impl<'a> PreparedScene<'a> {
                 }
             }
         }
-        encoder.copy_buffer_to_buffer(&s.output, 0, &s.readback, 0, size);
+        if let Some(readback) = &s.readback {
+            encoder.copy_buffer_to_buffer(&s.output, 0, readback, 0, size);
+        }
         if let Some(timer) = &s.timer {
             timer.resolve(&mut encoder);
         }
@@ -588,43 +607,77 @@ impl Tiling {
     }
 }
 
+impl SlotBuffers {
+    /// A slot's buffers of `sizes`, those of the bins holding `band`'s lists where given.
+    /// Where the host maps the kernel's buffers, the output is mapped once here, which
+    /// zeroes it: wgpu would otherwise clear it before the first tile, and lavapipe touch
+    /// its fresh pages then.
+    fn new(gpu: &GpuRenderer, sizes: SlotSizes, band: Option<&Band>) -> Result<SlotBuffers, GpuError> {
+        use wgpu::BufferUsages as U;
+        let maps = gpu.maps_kernel_buffers();
+        let buffer = |label, size, usage, mapped_at_creation| {
+            gpu.device.create_buffer(&wgpu::BufferDescriptor { label: Some(label), size, usage, mapped_at_creation })
+        };
+        let params = buffer("params", std::mem::size_of::<Params>() as u64, U::STORAGE | U::COPY_DST, false);
+        let (output, readback) = if maps {
+            let output = buffer("pixels", sizes.tile_bytes, U::STORAGE | U::MAP_READ | U::MAP_WRITE, true);
+            output.unmap();
+            (output, None)
+        } else {
+            let output = buffer("pixels", sizes.tile_bytes, U::STORAGE | U::COPY_SRC, false);
+            (output, Some(buffer("readback", sizes.tile_bytes, U::MAP_READ | U::COPY_DST, false)))
+        };
+        let samples = buffer("samples", sizes.sample_bytes, U::STORAGE, false);
+        let band_usage = if maps { U::STORAGE | U::COPY_DST | U::MAP_WRITE } else { U::STORAGE | U::COPY_DST };
+        let bins = sizes.band_bytes.map(|(ranges, items)| {
+            let written = |label, size, bytes: Option<&[u8]>| -> Result<wgpu::Buffer, GpuError> {
+                let b = buffer(label, size, band_usage, bytes.is_some());
+                if let Some(bytes) = bytes {
+                    let mut view = b.slice(..bytes.len() as u64).get_mapped_range_mut();
+                    view.as_mut().map_err(|e| GpuError::Upload(format!("{label}: {e}")))?.copy_from_slice(bytes);
+                    drop(view);
+                    b.unmap();
+                }
+                Ok(b)
+            };
+            let band_items = band.filter(|b| !b.items.is_empty()).map(|b| bytemuck::cast_slice(&b.items));
+            Ok::<_, GpuError>(BandBuffers {
+                ranges: written("bin_ranges", ranges, band.map(|b| bytemuck::cast_slice(&b.ranges)))?,
+                items: written("bin_items", items, band_items)?,
+            })
+        });
+        let bins = bins.transpose()?;
+        let sampling = buffer("sampling", std::mem::size_of::<GpuSampling>() as u64, U::STORAGE | U::COPY_DST, false);
+        let timer = gpu.timestamps.then(|| Timer::new(&gpu.device));
+        Ok(SlotBuffers { params, sampling, samples, output, readback, bins, timer })
+    }
+
+    /// The buffer the host maps to read a tile.
+    fn readable(&self) -> &wgpu::Buffer {
+        self.readback.as_ref().unwrap_or(&self.output)
+    }
+}
+
 impl Slot {
     fn new(
         gpu: &GpuRenderer,
+        buffers: SlotBuffers,
         bindings: &BindingSet,
         inputs: &[Option<wgpu::Buffer>; BINDINGS.len()],
         counters: &wgpu::Buffer,
-        sizes: SlotSizes,
     ) -> Slot {
-        let buffer = |label, size, usage| {
-            gpu.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size,
-                usage,
-                mapped_at_creation: false,
-            })
-        };
-        use wgpu::BufferUsages as U;
-        let params = buffer("params", std::mem::size_of::<Params>() as u64, U::STORAGE | U::COPY_DST);
-        let output = buffer("pixels", sizes.tile_bytes, U::STORAGE | U::COPY_SRC);
-        let readback = buffer("readback", sizes.tile_bytes, U::MAP_READ | U::COPY_DST);
-        let samples = buffer("samples", sizes.sample_bytes, U::STORAGE);
-        let bins = sizes.band_bytes.map(|(ranges, items)| BandBuffers {
-            ranges: buffer("bin_ranges", ranges, U::STORAGE | U::COPY_DST),
-            items: buffer("bin_items", items, U::STORAGE | U::COPY_DST),
-        });
-        let sampling = buffer("sampling", std::mem::size_of::<GpuSampling>() as u64, U::STORAGE | U::COPY_DST);
+        let b = &buffers;
         let entries: Vec<_> = (0..BINDINGS.len())
             .filter(|&k| bindings.contains(k))
             .map(|k| {
                 let resource = match k {
-                    0 => &params,
-                    OUTPUT_BINDING => &output,
+                    0 => &b.params,
+                    OUTPUT_BINDING => &b.output,
                     COUNTERS_BINDING => counters,
-                    SAMPLES_BINDING => &samples,
-                    SAMPLING_BINDING => &sampling,
-                    BIN_RANGES_BINDING if bins.is_some() => &bins.as_ref().expect("checked").ranges,
-                    BIN_ITEMS_BINDING if bins.is_some() => &bins.as_ref().expect("checked").items,
+                    SAMPLES_BINDING => &b.samples,
+                    SAMPLING_BINDING => &b.sampling,
+                    BIN_RANGES_BINDING if b.bins.is_some() => &b.bins.as_ref().expect("checked").ranges,
+                    BIN_ITEMS_BINDING if b.bins.is_some() => &b.bins.as_ref().expect("checked").items,
                     _ => inputs[k].as_ref().expect("every input binding is uploaded"),
                 };
                 wgpu::BindGroupEntry { binding: k as u32, resource: resource.as_entire_binding() }
@@ -635,8 +688,7 @@ impl Slot {
             layout: &bindings.group,
             entries: &entries,
         });
-        let timer = gpu.timestamps.then(|| Timer::new(&gpu.device));
-        Slot { params, sampling, output, readback, bins, bind_group, timer }
+        Slot { buffers, bind_group }
     }
 }
 
@@ -735,6 +787,9 @@ fn upload_inputs(
     buffers: &SceneBuffers,
 ) -> Result<[Option<wgpu::Buffer>; BINDINGS.len()], GpuError> {
     let limit = gpu.limits.max_storage_buffer_binding_size;
+    // Written in place where the host maps the kernel's buffers: else through a staging
+    // buffer, which the device copies before the first tile.
+    let maps = gpu.maps_kernel_buffers();
     let bvh = buffers.bvh.as_ref();
     let bins = buffers.bins.as_ref();
     let grid = buffers.grid.as_ref();
@@ -775,7 +830,11 @@ fn upload_inputs(
         out[k] = Some(gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some(name),
             contents: bytes,
-            usage: wgpu::BufferUsages::STORAGE,
+            usage: if maps {
+                wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::MAP_WRITE
+            } else {
+                wgpu::BufferUsages::STORAGE
+            },
         }));
     }
     Ok(out)
