@@ -254,6 +254,7 @@ fn notice(lines: &[String]) {
         say(line);
     }
 }
+
 /// lavapipe (Mesa's CPU Vulkan driver) cuts each dispatch's workgroups into one contiguous
 /// share per thread, a thread per core by default, and the dispatch lasts as long as its
 /// slowest share: bands of an image are not equally busy, and a thread may start late. Two

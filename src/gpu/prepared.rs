@@ -48,10 +48,6 @@ pub struct PreparedScene<'a> {
     /// The frame's screen-space bins, whose lists each tile fills for its own band of rows
     /// ([`Bins::band`]) into its slot's buffers.
     bins: Option<Bins>,
-    /// The band of bins (its first bin row and bin rows) whose lists slot 0's buffers
-    /// already hold: those of the whole image's first tile, written while the kernel
-    /// compiled; taken by the first tile that runs in slot 0.
-    first_band: std::sync::Mutex<Option<(u32, u32)>>,
 }
 
 /// The `counters` binding: [`STATS_SLOTS`] slots of [`STATS_WORDS`] words, with a buffer to
@@ -95,6 +91,9 @@ struct SlotBuffers {
 struct BandBuffers {
     ranges: wgpu::Buffer,
     items: wgpu::Buffer,
+    /// The band (its first bin row and bin rows) whose lists the buffers hold: slot 0's
+    /// are the whole image's first tile's, written while the kernel compiles.
+    holds: std::sync::Mutex<Option<(u32, u32)>>,
 }
 
 /// One tile as the kernel wrote it and the host read it back, floats or packed 8-bit words
@@ -171,18 +170,17 @@ impl<'a> PreparedScene<'a> {
             let tile_bytes = options.width as u64 * tiling.tile_rows as u64 * layout.words() as u64 * 4;
             let sizes = SlotSizes { tile_bytes, sample_bytes: tiling.sample_bytes, band_bytes: tiling.band_bytes };
             let slots = options.height.div_ceil(tiling.tile_rows).min(2);
-            let band = first_band.as_ref().map(|(_, _, band)| band);
-            let slot_buffers: Vec<SlotBuffers> =
-                (0..slots).map(|k| SlotBuffers::new(gpu, sizes, band.filter(|_| k == 0))).collect::<Result<_, _>>()?;
-            let first_band = first_band.map(|(first, count, _)| (first, count));
+            let slot_buffers: Vec<SlotBuffers> = (0..slots)
+                .map(|k| SlotBuffers::new(gpu, sizes, first_band.as_ref().filter(|_| k == 0)))
+                .collect::<Result<_, _>>()?;
             // The plan failed (the bins' lists were too long): the kernel that is needed,
             // compiled here at once, not after the other.
             let config = config_for(&buffers, buffers.acceleration());
             let unplanned = (config != planned_config).then(|| Compiled::new(gpu, config, options, &scene.path));
-            Ok((config, unplanned, tiling, inputs, first_band, slot_buffers))
+            Ok((config, unplanned, tiling, inputs, slot_buffers))
         };
         let (planned, prepared) = in_parallel(|| Compiled::new(gpu, planned_config, options, &scene.path), prepare);
-        let (config, unplanned, tiling, inputs, first_band, slot_buffers) = prepared?;
+        let (config, unplanned, tiling, inputs, slot_buffers) = prepared?;
         let Compiled { bindings, pipeline, sampled } = unplanned.unwrap_or(planned)?;
         let Tiling { tile_rows, band_bytes, .. } = tiling;
         let counters = Counters::new(gpu, options.stats);
@@ -222,7 +220,6 @@ impl<'a> PreparedScene<'a> {
             counters,
             sampled,
             bins,
-            first_band: std::sync::Mutex::new(first_band),
         })
     }
 
@@ -421,17 +418,15 @@ impl<'a> PreparedScene<'a> {
     fn upload_band(&self, slot: usize, first_row: u32, rows: u32) -> u32 {
         let (Some(bins), Some(buffers)) = (&self.bins, &self.slots[slot].buffers.bins) else { return 0 };
         let (first, count) = Bins::rows_holding(first_row, rows);
-        if slot == 0 {
-            let written = self.first_band.lock().unwrap_or_else(|e| e.into_inner()).take();
-            if written == Some((first, count)) {
-                return first;
+        let mut holds = buffers.holds.lock().unwrap_or_else(|e| e.into_inner());
+        if *holds != Some((first, count)) {
+            let band = bins.band(first, count);
+            let queue = &self.gpu.queue;
+            queue.write_buffer(&buffers.ranges, 0, bytemuck::cast_slice(&band.ranges));
+            if !band.items.is_empty() {
+                queue.write_buffer(&buffers.items, 0, bytemuck::cast_slice(&band.items));
             }
-        }
-        let band = bins.band(first, count);
-        let queue = &self.gpu.queue;
-        queue.write_buffer(&buffers.ranges, 0, bytemuck::cast_slice(&band.ranges));
-        if !band.items.is_empty() {
-            queue.write_buffer(&buffers.items, 0, bytemuck::cast_slice(&band.items));
+            *holds = Some((first, count));
         }
         first
     }
@@ -608,11 +603,12 @@ impl Tiling {
 }
 
 impl SlotBuffers {
-    /// A slot's buffers of `sizes`, those of the bins holding `band`'s lists where given.
+    /// A slot's buffers of `sizes`, those of the bins holding the lists of `band` (its
+    /// first bin row, bin rows and lists) where given.
     /// Where the host maps the kernel's buffers, the output is mapped once here, which
     /// zeroes it: wgpu would otherwise clear it before the first tile, and lavapipe touch
     /// its fresh pages then.
-    fn new(gpu: &GpuRenderer, sizes: SlotSizes, band: Option<&Band>) -> Result<SlotBuffers, GpuError> {
+    fn new(gpu: &GpuRenderer, sizes: SlotSizes, band: Option<&(u32, u32, Band)>) -> Result<SlotBuffers, GpuError> {
         use wgpu::BufferUsages as U;
         let maps = gpu.maps_kernel_buffers();
         let buffer = |label, size, usage, mapped_at_creation| {
@@ -640,10 +636,12 @@ impl SlotBuffers {
                 }
                 Ok(b)
             };
-            let band_items = band.filter(|b| !b.items.is_empty()).map(|b| bytemuck::cast_slice(&b.items));
+            let lists = band.map(|(_, _, lists)| lists);
+            let list_items = lists.filter(|b| !b.items.is_empty()).map(|b| bytemuck::cast_slice(&b.items));
             Ok::<_, GpuError>(BandBuffers {
-                ranges: written("bin_ranges", ranges, band.map(|b| bytemuck::cast_slice(&b.ranges)))?,
-                items: written("bin_items", items, band_items)?,
+                ranges: written("bin_ranges", ranges, lists.map(|b| bytemuck::cast_slice(&b.ranges)))?,
+                items: written("bin_items", items, list_items)?,
+                holds: std::sync::Mutex::new(band.map(|&(first, count, _)| (first, count))),
             })
         });
         let bins = bins.transpose()?;
