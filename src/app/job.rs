@@ -136,6 +136,12 @@ impl Report {
                 args.triangle_test.name(),
                 args.sphere_test.name()
             ));
+            if raycaster::gpu::fuse::requested() {
+                lines.push(format!(
+                    "fused mode ({}=1): every multiply-add, dot and cross of the kernel fused, in f64",
+                    raycaster::gpu::fuse::VARIABLE
+                ));
+            }
             // The parts of the GPU's rendering time that it measures on its own.
             time += &format!(" (preparing {:.1} ms: buffers, pipeline, upload", stats.prepare_ms);
             if let Some(build) = stats.acceleration_build_ms {

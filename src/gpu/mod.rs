@@ -11,6 +11,7 @@
 mod bindings;
 pub mod binning;
 pub mod flatten;
+pub mod fuse;
 mod handoff;
 pub mod layout;
 pub mod precision;
@@ -475,6 +476,16 @@ impl GpuRenderer {
         if adapter.get_info().device_type == wgpu::DeviceType::Cpu {
             wanted |= wgpu::Features::MAPPABLE_PRIMARY_BUFFERS;
         }
+        if fuse::requested() {
+            // The fused mode computes each fused operation in f64 (gpu::fuse).
+            if !adapter.features().contains(wgpu::Features::SHADER_F64) {
+                return Err(GpuError::Device(format!(
+                    "{}=1 needs f64 in shaders, which this adapter does not offer",
+                    fuse::VARIABLE
+                )));
+            }
+            wanted |= wgpu::Features::SHADER_F64;
+        }
         let features = adapter.features() & wanted;
         let (device, queue) = adapter
             .request_device(&wgpu::DeviceDescriptor {
@@ -635,6 +646,9 @@ impl GpuRenderer {
     }
 
     fn kernel(config: KernelConfig) -> naga::Module {
+        if fuse::requested() {
+            return specialise::specialise(&shader::fused_module().0, &config.constants(), config.entry_point());
+        }
         specialise::specialise(shader::module(), &config.constants(), config.entry_point())
     }
 

@@ -116,6 +116,17 @@ pub fn module() -> &'static naga::Module {
     MODULE.get_or_init(|| super::specialise::parse(source()))
 }
 
+/// The kernel of the fused test mode ([`super::fuse`]): its helpers, then [`source`], with
+/// every multiply-add swapped for its fused helper; and the function of each one swapped.
+pub fn fused_module() -> &'static (naga::Module, Vec<String>) {
+    static MODULE: OnceLock<(naga::Module, Vec<String>)> = OnceLock::new();
+    MODULE.get_or_init(|| {
+        let mut module = super::specialise::parse(&format!("{}{}", super::fuse::prelude(), source()));
+        let fused = super::fuse::fuse(&mut module);
+        (module, fused)
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
