@@ -4,9 +4,16 @@
 // spans the camera's extent and the shorter one is cropped (docs/SPEC.md §3).
 fn primary_ray(i: u32, j: u32) -> Ray {
     let longer = f32(max(P.width, P.height));
-    let x = (f32(i) + 0.5 - 0.5 * f32(P.width)) / longer;
-    let y = (f32(j) + 0.5 - 0.5 * f32(P.height)) / longer;
-    let offset = x * P.horizontal + y * P.up;
+    let x = (f32(i) + 0.5 - rounded(0.5 * f32(P.width))) / longer;
+    let y = (f32(j) + 0.5 - rounded(0.5 * f32(P.height))) / longer;
+    return ray_through(x, y);
+}
+
+// The ray through screen coordinates (x, y). Products rounded (shaders/exact.wgsl): a
+// pixel mirrored across the image's centre gets the mirrored ray on every driver, so a ray
+// exactly on a symmetric edge stays exactly on it.
+fn ray_through(x: f32, y: f32) -> Ray {
+    let offset = rounded3(x * P.horizontal) + rounded3(y * P.up);
     if (ORTHOGRAPHIC) {
         return Ray(offset, P.direction);
     }

@@ -3,11 +3,11 @@
 
 fn to_unit_sphere_point(e: Ellipsoid, p: vec3<f32>) -> vec3<f32> {
     let h = vec4<f32>(p, 1.0);
-    return vec3<f32>(dot(e.row0, h), dot(e.row1, h), dot(e.row2, h));
+    return vec3<f32>(dot4(e.row0, h), dot4(e.row1, h), dot4(e.row2, h));
 }
 
 fn to_unit_sphere_vector(e: Ellipsoid, v: vec3<f32>) -> vec3<f32> {
-    return vec3<f32>(dot(e.row0.xyz, v), dot(e.row1.xyz, v), dot(e.row2.xyz, v));
+    return vec3<f32>(dot3(e.row0.xyz, v), dot3(e.row1.xyz, v), dot3(e.row2.xyz, v));
 }
 
 // The direction is not renormalised in the unit sphere's space, so the root t found there
@@ -20,5 +20,5 @@ fn ellipsoid_t(e: Ellipsoid, ray: Ray, tmin: f32) -> f32 {
 // (the inverse transpose of the object-to-world map, whose inverse W we hold).
 fn ellipsoid_normal(e: Ellipsoid, world_point: vec3<f32>) -> vec3<f32> {
     let n = to_unit_sphere_point(e, world_point);
-    return normalize(e.row0.xyz * n.x + e.row1.xyz * n.y + e.row2.xyz * n.z);
+    return normalize(rounded3(e.row0.xyz * n.x) + rounded3(e.row1.xyz * n.y) + rounded3(e.row2.xyz * n.z));
 }

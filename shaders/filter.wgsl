@@ -8,7 +8,7 @@ fn filter_weight(dx: f32, dy: f32) -> f32 {
     if (sampling.filter_kind == 0u) {
         return select(0.0, 1.0, abs(dx) <= r && abs(dy) <= r);
     }
-    let d2 = dx * dx + dy * dy;
+    let d2 = rounded(dx * dx) + rounded(dy * dy);
     if (sampling.filter_kind == 1u) {
         return max(0.0, 1.0 - sqrt(d2) / r);
     }

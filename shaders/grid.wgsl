@@ -14,7 +14,7 @@ fn grid_span(ray: Ray, tmin: f32, tmax: f32) -> vec2<f32> {
         return vec2<f32>(1.0, 0.0);
     }
     let lo = P.grid_min;
-    let hi = P.grid_min + P.grid_cell * vec3<f32>(f32(P.grid_nx), f32(P.grid_ny), f32(P.grid_nz));
+    let hi = P.grid_min + rounded3(P.grid_cell * vec3<f32>(f32(P.grid_nx), f32(P.grid_ny), f32(P.grid_nz)));
     let parallel = ray.direction == vec3<f32>(0.0);
     let d = select(ray.direction, vec3<f32>(1.0), parallel);
     let t0 = (lo - ray.origin) / d;
@@ -40,7 +40,7 @@ struct March {
 // may put a point on the box's face just outside).
 fn march_start(ray: Ray, t_in: f32) -> March {
     let n = vec3<i32>(i32(P.grid_nx), i32(P.grid_ny), i32(P.grid_nz));
-    let p = ray.origin + t_in * ray.direction;
+    let p = along(ray.origin, t_in, ray.direction);
     let cell = clamp(vec3<i32>(floor((p - P.grid_min) / P.grid_cell)), vec3<i32>(0), n - 1);
     return March(cell, vec3<i32>(sign(ray.direction)), vec3<f32>(F32_MAX), F32_MAX);
 }
@@ -53,7 +53,7 @@ fn march_start(ray: Ray, t_in: f32) -> March {
 fn march_cell(ray: Ray, m: ptr<function, March>, t_out: f32) -> vec2<u32> {
     count(COUNT_CELLS);
     let boundary = (*m).cell + select(vec3<i32>(0), vec3<i32>(1), (*m).step > vec3<i32>(0));
-    let plane = P.grid_min + vec3<f32>(boundary) * P.grid_cell;
+    let plane = P.grid_min + rounded3(vec3<f32>(boundary) * P.grid_cell);
     let still = (*m).step == vec3<i32>(0);
     let d = select(ray.direction, vec3<f32>(1.0), still);
     let t_next = select((plane - ray.origin) / d, vec3<f32>(F32_MAX), still);

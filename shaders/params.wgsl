@@ -113,6 +113,12 @@ struct Params {
     grid_cell: vec3<f32>,
     // The bin row where the band of bins bound for this dispatch starts (USE_BINS).
     first_bin_row: u32,
+    // Always 0: or-ed into products whose rounding must not be the compiler's choice
+    // (shaders/exact.wgsl), from the buffer so that no compiler can see it is 0.
+    zero_bits: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 }
 
 // A sphere in world space (a similarity transform was baked into it).

@@ -3,9 +3,9 @@
 
 // A ray parallel to the plane never hits it, even when it lies in it.
 fn plane_t(p: Plane, ray: Ray, tmin: f32) -> f32 {
-    let denominator = dot(p.normal, ray.direction);
+    let denominator = dot3(p.normal, ray.direction);
     if (denominator == 0.0) {
         return NO_HIT;
     }
-    return t_if_above((p.offset - dot(p.normal, ray.origin)) / denominator, tmin);
+    return t_if_above((p.offset - dot3(p.normal, ray.origin)) / denominator, tmin);
 }

@@ -61,13 +61,24 @@ fn sample_position(i: u32, j: u32, k: u32) -> vec2<f32> {
 // The ray through the point p (pixel-local, y up) of pixel (i, j): camera::PrimaryRays::ray_at.
 fn primary_ray_at(i: u32, j: u32, p: vec2<f32>) -> Ray {
     let longer = f32(max(P.width, P.height));
-    let x = (f32(i) + p.x - 0.5 * f32(P.width)) / longer;
-    let y = (f32(j) + p.y - 0.5 * f32(P.height)) / longer;
-    let offset = x * P.horizontal + y * P.up;
-    if (ORTHOGRAPHIC) {
-        return Ray(offset, P.direction);
+    let x = (f32(i) + p.x - rounded(0.5 * f32(P.width))) / longer;
+    let y = (f32(j) + p.y - rounded(0.5 * f32(P.height))) / longer;
+    return ray_through(x, y);
+}
+
+// The ray of sample k of pixel (i, j). A uniform sample's screen coordinates come from whole
+// numbers, x = ((2i − W)·m + 2a + 1) / (2·m·longer) for column a of the m × m grid, exact
+// but for the one division: mirrored samples get exactly mirrored rays, and a sample on a
+// symmetric edge stays on it (camera::PrimaryRays::grid_ray in f64; docs/SPEC.md §8).
+fn sample_ray(i: u32, j: u32, k: u32) -> Ray {
+    if (sampling.kind != 0u) {
+        return primary_ray_at(i, j, sample_position(i, j, k));
     }
-    return Ray(vec3<f32>(0.0), normalize(P.direction + offset));
+    let m = sampling.side;
+    let nx = i32(2u * i * m + 2u * (k % m) + 1u) - i32(P.width * m);
+    let ny = i32(2u * j * m + 2u * (k / m) + 1u) - i32(P.height * m);
+    let scale = f32(2u * m * max(P.width, P.height));
+    return ray_through(f32(nx) / scale, f32(ny) / scale);
 }
 
 // One sample per invocation: x the column, y the row of samples, z the sample's index.
@@ -82,7 +93,7 @@ fn main_samples(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let j = P.height - 1u - (sampling.first_row + r);
-    let ray = primary_ray_at(i, j, sample_position(i, j, k));
+    let ray = sample_ray(i, j, k);
     load_shading_data();
     // -visualize_grid's picture (grid.wgsl's voxels), sample by sample, as `main` draws it.
     var shaded: Shaded;
@@ -146,7 +157,7 @@ fn start_sample(q: u32, i: u32, base: u32, first: u32, per_row: u32, rows: u32, 
     let sample = first + q - row * per_row;
     let j = P.height - 1u - image_row;
     let k = min(sample, sampling.count - 1u);
-    packet_rays[q] = primary_ray_at(i, j, sample_position(i, j, k));
+    packet_rays[q] = sample_ray(i, j, k);
     if (sample_is_written(image_row, sample) && row_is_in_tile(image_row)) {
         count(COUNT_RAYS);
     }

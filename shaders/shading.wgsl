@@ -37,7 +37,7 @@ fn lobe_power(x: f32, e: f32) -> f32 {
 // the half vector H = normalise(L + V), cut where N·L ≤ 0 or, with SPECULAR_FIX,
 // multiplied by N·L (the handout's optional fix; cpu::local).
 fn local(material: Material, n: vec3<f32>, light: Incoming, to_viewer: vec3<f32>) -> vec3<f32> {
-    let cos_light = dot(light.to_light, n);
+    let cos_light = dot3(light.to_light, n);
     let diffuse = max(cos_light, 0.0) * light.color * material.diffuse;
     if (!SPECULAR || all(material.specular == vec3<f32>(0.0)) || cos_light <= 0.0) {
         return diffuse;
@@ -74,12 +74,12 @@ fn in_shadow(surface: Surface, n: vec3<f32>, light: Light, arriving: Incoming) -
 // A back face is black unless SHADE_BACK, which shades it with the flipped normal, as the
 // course's -shade_back does.
 fn is_black(surface: Surface, ray: Ray) -> bool {
-    return !SHADE_BACK && dot(ray.direction, surface.normal) > 0.0;
+    return !SHADE_BACK && dot3(ray.direction, surface.normal) > 0.0;
 }
 
 // The normal turned toward the viewer.
 fn facing_normal(surface: Surface, ray: Ray) -> vec3<f32> {
-    return select(surface.normal, -surface.normal, dot(ray.direction, surface.normal) > 0.0);
+    return select(surface.normal, -surface.normal, dot3(ray.direction, surface.normal) > 0.0);
 }
 
 // Ambient plus each light, seen along `ray` (unit direction); a solid texture's blend of
@@ -141,7 +141,7 @@ fn shade_phong(material: Material, surface: Surface, n: vec3<f32>, ray: Ray) -> 
         let light = light_at(k);
         let arriving = incoming(light, surface.point);
         // A light behind the surface adds nothing, so it needs no shadow ray.
-        if (SHADOWS && dot(arriving.to_light, n) > 0.0 && in_shadow(surface, n, light, arriving)) {
+        if (SHADOWS && dot3(arriving.to_light, n) > 0.0 && in_shadow(surface, n, light, arriving)) {
             continue;
         }
         color += local(material, n, arriving, -ray.direction);

@@ -25,10 +25,10 @@ fn nearest_root(r0: f32, r1: f32, tmin: f32) -> f32 {
 // sphere, and −b ± √Δ cancels for one of the roots. Kept to measure what the precise form buys
 // (--sphere-test naive; scenes/hard/far_sphere.txt loses the whole sphere).
 fn sphere_t_textbook(f: vec3<f32>, d: vec3<f32>, radius: f32, tmin: f32) -> f32 {
-    let a = dot(d, d);
-    let b = 2.0 * dot(f, d);
-    let c = dot(f, f) - radius * radius;
-    let discriminant = b * b - 4.0 * a * c;
+    let a = dot3(d, d);
+    let b = 2.0 * dot3(f, d);
+    let c = dot3(f, f) - rounded(radius * radius);
+    let discriminant = difference_of_products(b, b, 4.0 * a, c);
     if (discriminant < 0.0) {
         return NO_HIT;
     }
@@ -43,14 +43,17 @@ fn sphere_t_textbook(f: vec3<f32>, d: vec3<f32>, radius: f32, tmin: f32) -> f32 
 // q = b + sign(b)·√(a·Δ) and the roots c/q and q/a, so neither root is a difference of
 // nearly equal numbers (the textbook's −b ± √Δ is, for one of the two).
 fn sphere_t_precise(f: vec3<f32>, d: vec3<f32>, radius: f32, tmin: f32) -> f32 {
-    let a = dot(d, d);
-    let b = -dot(f, d);
-    let perpendicular = f + (b / a) * d;
-    let discriminant = radius * radius - dot(perpendicular, perpendicular);
+    let a = dot3(d, d);
+    let b = -dot3(f, d);
+    let perpendicular = along(f, b / a, d);
+    let discriminant = rounded(radius * radius) - dot3(perpendicular, perpendicular);
     if (discriminant < 0.0) {
         return NO_HIT;
     }
-    let c = dot(f, f) - radius * radius;
-    let q = b + select(-1.0, 1.0, b >= 0.0) * sqrt(a * discriminant);
-    return nearest_root(c / q, q / a, tmin);
+    let c = dot3(f, f) - rounded(radius * radius);
+    let q = b + rounded(select(-1.0, 1.0, b >= 0.0) * sqrt(a * discriminant));
+    // q = 0 only for a ray that starts on the sphere and touches it there (b = 0, Δ = 0):
+    // its one root is 0, and c / q would be 0 / 0.
+    let near = select(c / q, q / a, q == 0.0);
+    return nearest_root(near, q / a, tmin);
 }

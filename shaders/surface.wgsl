@@ -25,7 +25,7 @@ fn max_norm(v: vec3<f32>) -> f32 {
 
 // `hit` must be a hit (hit.t < NO_HIT).
 fn surface_at(hit: Closest, ray: Ray) -> Surface {
-    let p = ray.origin + hit.t * ray.direction;
+    let p = along(ray.origin, hit.t, ray.direction);
     let scale = max(max_norm(ray.origin), max_norm(p));
     if (HAS_SPHERES && hit.kind == KIND_SPHERE) {
         let s = spheres[hit.index];
@@ -67,8 +67,8 @@ const SPAWN_OFFSET: f32 = 1.9073486328125e-6;
 // or 11 (2⁴), against 2 moved along d (2⁵). A ray leaving at less than 1/1024 to the
 // surface moves 1024 times the offset along itself.
 fn spawn_origin(surface: Surface, side: vec3<f32>, d: vec3<f32>) -> vec3<f32> {
-    let away = max(dot(d, side), 1.0 / 1024.0);
-    return surface.point + (SPAWN_OFFSET * surface.scale / away) * d;
+    let away = max(dot3(d, side), 1.0 / 1024.0);
+    return along(surface.point, SPAWN_OFFSET * surface.scale / away, d);
 }
 
 // How far a ray from the surface's point along the unit direction d goes inside the closed
@@ -83,14 +83,14 @@ fn spawn_origin(surface: Surface, side: vec3<f32>, d: vec3<f32>) -> vec3<f32> {
 // error is the normal's, not the point's.
 fn solid_exit_t(surface: Surface, d: vec3<f32>) -> f32 {
     if (HAS_SPHERES && surface.kind == KIND_SPHERE) {
-        return -2.0 * spheres[surface.index].radius * dot(surface.normal, d);
+        return -2.0 * spheres[surface.index].radius * dot3(surface.normal, d);
     }
     if (HAS_ELLIPSOIDS && surface.kind == KIND_ELLIPSOID) {
         // The same chord in the unit sphere's space, where t is the world t (ellipsoid_t).
         let e = ellipsoids[surface.index];
         let q = to_unit_sphere_point(e, surface.point);
         let v = to_unit_sphere_vector(e, d);
-        return -2.0 * dot(q, v) / dot(v, v);
+        return -2.0 * dot3(q, v) / dot3(v, v);
     }
     return NO_HIT;
 }

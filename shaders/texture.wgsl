@@ -83,8 +83,8 @@ var<private> shading_secondary_ray: bool;
 // than one level off otherwise).
 fn check_reach(t: Texture, p: vec3<f32>) {
     let a = abs(p);
-    let q = max(max(dot(abs(t.row0.xyz), a) + abs(t.row0.w), dot(abs(t.row1.xyz), a) + abs(t.row1.w)),
-                dot(abs(t.row2.xyz), a) + abs(t.row2.w));
+    let q = max(max(dot3(abs(t.row0.xyz), a) + abs(t.row0.w), dot3(abs(t.row1.xyz), a) + abs(t.row1.w)),
+                dot3(abs(t.row2.xyz), a) + abs(t.row2.w));
     // `!(q <= reach)`: a NaN coordinate is beyond reach too.
     if (!(q <= t.reach) || (shading_secondary_ray && t.kind == 1u)) {
         beyond_texture_reach = true;
@@ -95,7 +95,9 @@ fn check_reach(t: Texture, p: vec3<f32>) {
 fn first_material_share(t: Texture, p: vec3<f32>) -> f32 {
     check_reach(t, p);
     let h = vec4<f32>(p, 1.0);
-    let q = vec3<f32>(dot(t.row0, h), dot(t.row1, h), dot(t.row2, h));
+    // Rounded products (shaders/exact.wgsl): which checkerboard cell a point lies in is a
+    // decision, the same on every driver.
+    let q = vec3<f32>(dot4(t.row0, h), dot4(t.row1, h), dot4(t.row2, h));
     switch t.kind {
         case 1u: {
             let cell = floor(q);

@@ -57,12 +57,13 @@ fn push_ray(ray: Ray, tint: vec3<f32>, share: f32, parent: Pending, index: f32) 
 // reflection.
 fn refraction(d: vec3<f32>, n: vec3<f32>, index_from: f32, index_to: f32) -> vec4<f32> {
     let eta = index_from / index_to;
-    let cos_in = -dot(d, n);
-    let k = 1.0 - eta * eta * (1.0 - cos_in * cos_in);
+    let cos_in = -dot3(d, n);
+    // Whether the ray is reflected whole (k < 0) is a decision: products rounded.
+    let k = 1.0 - rounded(rounded(eta * eta) * (1.0 - rounded(cos_in * cos_in)));
     if (k < 0.0) {
         return vec4<f32>(0.0);
     }
-    return vec4<f32>(normalize(eta * d + (eta * cos_in - sqrt(k)) * n), 1.0);
+    return vec4<f32>(normalize(rounded3(eta * d) + rounded3((rounded(eta * cos_in) - sqrt(k)) * n)), 1.0);
 }
 
 // The reflected and refracted rays of the surface `node.ray` hit, while the tree may go
@@ -95,13 +96,13 @@ fn push_children(surface: Surface, node: Pending) {
 fn push_material_children(surface: Surface, node: Pending, material: Material, share: f32) {
     let n = facing_normal(surface, node.ray);
     let d = node.ray.direction;
-    let index_to = select(1.0, material.index_of_refraction, dot(d, surface.normal) < 0.0);
+    let index_to = select(1.0, material.index_of_refraction, dot3(d, surface.normal) < 0.0);
     // Refraction first, so that reflection, which the reference adds first, is traced first.
     let refracted = refraction(d, n, node.index, index_to);
     if (refracted.w != 0.0) {
         push_ray(Ray(spawn_origin(surface, -n, refracted.xyz), refracted.xyz), material.transparent, share, node, index_to);
     }
-    let reflected = d - 2.0 * dot(d, n) * n;
+    let reflected = d - rounded3(2.0 * dot3(d, n) * n);
     push_ray(Ray(spawn_origin(surface, n, reflected), reflected), material.reflective, share, node, node.index);
 }
 

@@ -16,37 +16,37 @@ fn triangle_t_cramer(tri: Triangle, ray: Ray, tmin: f32) -> f32 {
     let e1 = tri.v0 - tri.v2;
     let e2 = tri.v1 - tri.v2;
     let oc = ray.origin - tri.v2;
-    let n = cross(e1, e2);
-    let det = -dot(ray.direction, n);
+    let n = cross3(e1, e2);
+    let det = -dot3(ray.direction, n);
     if (det == 0.0) {
         return NO_HIT;
     }
-    let alpha = -dot(ray.direction, cross(oc, e2)) / det;
-    let beta = -dot(ray.direction, cross(e1, oc)) / det;
+    let alpha = -dot3(ray.direction, cross3(oc, e2)) / det;
+    let beta = -dot3(ray.direction, cross3(e1, oc)) / det;
     if (alpha < 0.0 || beta < 0.0 || alpha + beta > 1.0) {
         return NO_HIT;
     }
-    return t_if_above(dot(oc, n) / det, tmin);
+    return t_if_above(dot3(oc, n) / det, tmin);
 }
 
 // Möller, Trumbore, "Fast, Minimum Storage Ray/Triangle Intersection", JGT 2(1), 1997.
 fn triangle_t_moller(tri: Triangle, ray: Ray, tmin: f32) -> f32 {
     let e1 = tri.v1 - tri.v0;
     let e2 = tri.v2 - tri.v0;
-    let p = cross(ray.direction, e2);
-    let det = dot(e1, p);
+    let p = cross3(ray.direction, e2);
+    let det = dot3(e1, p);
     if (det == 0.0) {
         return NO_HIT;
     }
     let inv = 1.0 / det;
     let s = ray.origin - tri.v0;
-    let u = dot(s, p) * inv;
-    let q = cross(s, e1);
-    let v = dot(ray.direction, q) * inv;
+    let u = rounded(dot3(s, p) * inv);
+    let q = cross3(s, e1);
+    let v = rounded(dot3(ray.direction, q) * inv);
     if (u < 0.0 || v < 0.0 || u + v > 1.0) {
         return NO_HIT;
     }
-    return t_if_above(dot(e2, q) * inv, tmin);
+    return t_if_above(dot3(e2, q) * inv, tmin);
 }
 
 // Per-ray set-up of the watertight test: the axis permutation that makes the ray's largest
@@ -83,20 +83,23 @@ fn permute(v: vec3<f32>, k: vec3<u32>) -> vec3<f32> {
 // functions are computed in a frame where the ray is the +z axis, so an edge shared by two
 // triangles gives both the same value with opposite signs: no ray slips between them.
 // The paper recomputes an edge function that is exactly 0 in double precision; here 0
-// counts as inside, so a ray on a shared edge is taken by both triangles, never by neither.
+// counts as inside (as the reference's α ≥ 0), so a ray on a shared edge is taken by both
+// triangles, never by neither. Every product is rounded on its own (shaders/exact.wgsl): the
+// edge functions of a zero-area triangle are then exactly 0 on every driver, and so is
+// their sum, the determinant, whatever the compiler fuses elsewhere.
 fn triangle_t_watertight(tri: Triangle, ray: Ray, shear: Shear, tmin: f32) -> f32 {
     let a = permute(tri.v0 - ray.origin, shear.axes);
     let b = permute(tri.v1 - ray.origin, shear.axes);
     let c = permute(tri.v2 - ray.origin, shear.axes);
-    let ax = a.x - shear.s.x * a.z;
-    let ay = a.y - shear.s.y * a.z;
-    let bx = b.x - shear.s.x * b.z;
-    let by = b.y - shear.s.y * b.z;
-    let cx = c.x - shear.s.x * c.z;
-    let cy = c.y - shear.s.y * c.z;
-    let u = cx * by - cy * bx;
-    let v = ax * cy - ay * cx;
-    let w = bx * ay - by * ax;
+    let ax = a.x - rounded(shear.s.x * a.z);
+    let ay = a.y - rounded(shear.s.y * a.z);
+    let bx = b.x - rounded(shear.s.x * b.z);
+    let by = b.y - rounded(shear.s.y * b.z);
+    let cx = c.x - rounded(shear.s.x * c.z);
+    let cy = c.y - rounded(shear.s.y * c.z);
+    let u = difference_of_products(cx, by, cy, bx);
+    let v = difference_of_products(ax, cy, ay, cx);
+    let w = difference_of_products(bx, ay, by, ax);
     if ((u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0)) {
         return NO_HIT;
     }
@@ -104,7 +107,8 @@ fn triangle_t_watertight(tri: Triangle, ray: Ray, shear: Shear, tmin: f32) -> f3
     if (det == 0.0) {
         return NO_HIT;
     }
-    return t_if_above((u * a.z + v * b.z + w * c.z) * shear.s.z / det, tmin);
+    let scaled = (rounded(u * a.z) + rounded(v * b.z)) + rounded(w * c.z);
+    return t_if_above(rounded(scaled * shear.s.z) / det, tmin);
 }
 
 // The host computed the normal from the f64 vertices: a cross product of the f32 ones would

@@ -33,7 +33,7 @@ fn stepping_axis(t_next: vec3<f32>) -> u32 {
 // direction component.
 fn entry_face(ray: Ray, tmin: f32) -> vec3<f32> {
     let lo = P.grid_min;
-    let hi = P.grid_min + P.grid_cell * vec3<f32>(f32(P.grid_nx), f32(P.grid_ny), f32(P.grid_nz));
+    let hi = P.grid_min + rounded3(P.grid_cell * vec3<f32>(f32(P.grid_nx), f32(P.grid_ny), f32(P.grid_nz)));
     let still = ray.direction == vec3<f32>(0.0);
     let d = select(ray.direction, vec3<f32>(1.0), still);
     let near = select(min((lo - ray.origin) / d, (hi - ray.origin) / d), vec3<f32>(-F32_MAX), still);
@@ -88,7 +88,7 @@ fn voxel_pixel(ray: Ray) -> Shaded {
         if (range.y > 0u) {
             var color = vec3<f32>(0.0);
             if (WANT_COLOR) {
-                color = voxel_shade(range.y, ray.origin + t_enter * ray.direction, n, ray);
+                color = voxel_shade(range.y, along(ray.origin, t_enter, ray.direction), n, ray);
             }
             return Shaded(true, color, n, t_enter, false);
         }

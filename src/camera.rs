@@ -119,6 +119,23 @@ impl PrimaryRays {
     /// sample's ray (docs/SPEC.md §8); [`PrimaryRays::ray`] at the centre.
     pub fn ray_at(&self, i: u32, j: u32, position: (f64, f64)) -> Ray {
         let (x, y) = self.screen_at(i, j, position);
+        self.ray_through(x, y)
+    }
+
+    /// The ray through the centre of cell `k` (column k mod m, row k div m) of an m × m grid
+    /// over pixel (i, j): a uniform sample's (docs/SPEC.md §8). Its screen coordinates come
+    /// from whole numbers, x = ((2i − W)·m + 2a + 1) / (2·m·longer), rounded once, so that
+    /// mirrored samples get exactly mirrored rays and a sample on a symmetric edge stays on it.
+    pub fn grid_ray(&self, i: u32, j: u32, k: u32, m: u32) -> Ray {
+        let scale = 2.0 * m as f64 * self.width.max(self.height) as f64;
+        let whole = |pixel: u32, cell: u32, side: u32| {
+            ((2 * pixel as i64 - side as i64) * m as i64 + 2 * cell as i64 + 1) as f64
+        };
+        self.ray_through(whole(i, k % m, self.width) / scale, whole(j, k / m, self.height) / scale)
+    }
+
+    /// The ray through screen coordinates (x, y) (docs/SPEC.md §3).
+    fn ray_through(&self, x: f64, y: f64) -> Ray {
         let offset = x * self.horizontal + y * self.up;
         if self.orthographic {
             Ray::new(self.center + offset, self.direction, f64::NEG_INFINITY)

@@ -80,6 +80,7 @@ fn host_structs_match_the_shader() {
             ("grid_nz", offset_of!(Params, grid_nz)),
             ("grid_cell", offset_of!(Params, grid_cell)),
             ("first_bin_row", offset_of!(Params, first_bin_row)),
+            ("zero_bits", offset_of!(Params, zero_bits)),
         ],
     );
     check(

@@ -19,7 +19,7 @@ pub use prepared::{Hit, ReferenceScene, SceneGrid, Surface};
 
 use crate::camera::{PrimaryRays, Ray};
 use crate::render::{Frame, Output, Pixel, RayStats, RenderOptions};
-use crate::sampling::Sampling;
+use crate::sampling::{Sampler, Sampling};
 use crate::scene::{Light, Material, Scene};
 use glam::DVec3;
 use rayon::prelude::*;
@@ -146,7 +146,11 @@ impl<'a> Reference<'a> {
         (0..sampling.count())
             .map(|k| {
                 let position = sampling.position(i, j, k);
-                (position, self.pixel_at(self.rays.ray_at(i, j, position), stats))
+                let ray = match sampling.sampler {
+                    Sampler::Uniform(_) => self.rays.grid_ray(i, j, k, sampling.sampler.side()),
+                    _ => self.rays.ray_at(i, j, position),
+                };
+                (position, self.pixel_at(ray, stats))
             })
             .collect()
     }

@@ -358,8 +358,16 @@ impl SceneBuffers {
         if DMat3::from_mat4(*matrix).determinant() < 0.0 {
             std::mem::swap(&mut b, &mut c);
         }
-        // A triangle f64 cannot give a normal is never hit (cpu::intersect_triangle).
-        let normal = (b - a).cross(c - a).try_normalize().unwrap_or(DVec3::Z);
+        // A triangle f64 cannot give a normal is never hit (cpu::intersect_triangle): it
+        // reaches the kernel as a point, whose edge functions and determinant are exactly 0
+        // on every driver (shaders/exact.wgsl), so it is tested (and counted) but never hit,
+        // and its normal is a unit vector, not the NaN of a zero vector normalised.
+        let Some(normal) = (b - a).cross(c - a).try_normalize() else {
+            let point = f32x3(a);
+            let [normal_u, normal_v] = super::layout::octahedral(DVec3::Z);
+            self.triangles.push(GpuTriangle { v0: point, material, v1: point, normal_u, v2: point, normal_v });
+            return;
+        };
         let [normal_u, normal_v] = super::layout::octahedral(normal);
         self.triangles.push(GpuTriangle { v0: f32x3(a), material, v1: f32x3(b), normal_u, v2: f32x3(c), normal_v });
     }

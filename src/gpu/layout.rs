@@ -39,6 +39,12 @@ pub struct Params {
     pub grid_cell: [f32; 3],
     /// The first bin row of the band whose lists the tile's bindings hold (USE_BINS).
     pub first_bin_row: u32,
+    /// Always 0: the kernel ors it into products whose rounding no compiler may choose
+    /// (shaders/exact.wgsl).
+    pub zero_bits: u32,
+    pub _pad0: u32,
+    pub _pad1: u32,
+    pub _pad2: u32,
 }
 
 /// WGSL `Sampling` (shaders/sampling.wgsl): the sampler, the filter, and the rows of samples

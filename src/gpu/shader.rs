@@ -13,6 +13,7 @@ use std::sync::OnceLock;
 ///
 /// - `params.wgsl`: `override` switches, the structs shared with the host, the bindings;
 /// - `stats.wgsl`: the `-stats` counters, compiled in only where asked for;
+/// - `exact.wgsl`: products whose rounding no driver chooses, for the signs that decide hits;
 /// - `ray.wgsl`, `camera.wgsl`: the ray, its interval, primary rays;
 /// - `sphere.wgsl`, `ellipsoid.wgsl`, `plane.wgsl`, `triangle.wgsl`: ray/primitive tests,
 ///   each returning the nearest t or `NO_HIT`;
@@ -33,9 +34,10 @@ use std::sync::OnceLock;
 /// Plain concatenation, not a composer such as naga_oil: nothing is resolved at run time,
 /// no dependency is added, and naga sees one module as it did when the kernel was one file
 /// (lavapipe's compile time, measured with an empty shader cache, did not change).
-pub const FILES: [(&str, &str); 22] = [
+pub const FILES: [(&str, &str); 23] = [
     ("params.wgsl", include_str!("../../shaders/params.wgsl")),
     ("stats.wgsl", include_str!("../../shaders/stats.wgsl")),
+    ("exact.wgsl", include_str!("../../shaders/exact.wgsl")),
     ("ray.wgsl", include_str!("../../shaders/ray.wgsl")),
     ("camera.wgsl", include_str!("../../shaders/camera.wgsl")),
     ("sphere.wgsl", include_str!("../../shaders/sphere.wgsl")),
