@@ -164,6 +164,7 @@ fn or_reference<T, E: From<GpuError>>(
             let reason = match e {
                 GpuError::Precision(e) => e.to_string(),
                 GpuError::Unsupported(e) => e.to_string(),
+                GpuError::NonFinite(what) => what,
                 other => other.to_string(),
             };
             let notice = format!("{reason}; rendering with the f64 CPU reference instead");

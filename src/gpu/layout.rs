@@ -239,7 +239,9 @@ impl GpuTexture {
             octaves: texture.octaves,
             frequency: texture.frequency as f32,
             amplitude: texture.amplitude as f32,
-            reach: super::texture_range::reach(texture) as f32,
+            // A blend that never changes reaches everywhere: f32::MAX, not the infinity of
+            // its rate of 0, since the kernel takes finite values only (gpu::finite).
+            reach: (super::texture_range::reach(texture) as f32).min(f32::MAX),
             spawns: spawns as u32,
         }
     }

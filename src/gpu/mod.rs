@@ -10,6 +10,7 @@
 
 mod bindings;
 pub mod binning;
+pub mod finite;
 pub mod flatten;
 pub mod fuse;
 mod handoff;
@@ -136,13 +137,16 @@ pub enum GpuError {
     Precision(precision::PrecisionError),
     #[error("{0}; render it with --backend cpu")]
     Unsupported(support::UnsupportedError),
+    /// A NaN or an infinity in what the host would upload (gpu::finite).
+    #[error("{0}; render it with --backend cpu")]
+    NonFinite(String),
 }
 
 impl GpuError {
     /// Whether the GPU refused the scene itself (out of its f32 range, or shading it does
     /// not implement), which the f64 reference renders: `auto` falls back on these.
     pub fn reference_renders_it(&self) -> bool {
-        matches!(self, GpuError::Precision(_) | GpuError::Unsupported(_))
+        matches!(self, GpuError::Precision(_) | GpuError::Unsupported(_) | GpuError::NonFinite(_))
     }
 }
 

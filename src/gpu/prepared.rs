@@ -819,6 +819,11 @@ fn upload_inputs(
     for (k, bytes) in contents.iter().enumerate() {
         let Some(bytes) = bytes else { continue };
         let name = BINDINGS[k].name;
+        if let Some((element, at, value)) = super::finite::first_non_finite(k as u32, bytes) {
+            return Err(GpuError::NonFinite(format!(
+                "{name}[{element}] holds {value} at byte {at}: the kernel takes finite values only"
+            )));
+        }
         if bytes.len() as u64 > limit {
             return Err(GpuError::TooLarge(format!(
                 "{name}: {} bytes exceed the adapter's storage binding limit of {limit} bytes",

@@ -218,6 +218,7 @@ fn refusal(e: &GpuError) -> String {
     match e {
         GpuError::Precision(e) => e.to_string(),
         GpuError::Unsupported(e) => e.to_string(),
+        GpuError::NonFinite(what) => what.clone(),
         other => other.to_string(),
     }
 }
