@@ -42,6 +42,7 @@ fn run() -> Result<(), Failure> {
         Command::Batch { file, backend, shard } => batch(&file, backend, shard, habits),
         Command::Stitch(stitch_args) => stitch(&stitch_args, habits),
         Command::Bench(bench_args) => bench(&bench_args, habits),
+        Command::Selftest => selftest(),
     }
 }
 
@@ -232,6 +233,20 @@ fn open_backend(choice: BackendChoice, habits: Habits) -> Result<Backend, Failur
         say(&fallback);
     }
     Ok(backend)
+}
+
+/// `raycaster selftest`: the table on stdout; exit 1 where a case is not faithful.
+fn selftest() -> Result<(), Failure> {
+    let gpu = open_gpu()?;
+    let report = app::selftest::run(&gpu);
+    exit::print(&report.table)?;
+    match report.failed {
+        0 => Ok(()),
+        n => Err(Failure::Failed(format!(
+            "selftest: {n} of {} cases are not rendered faithfully by this GPU and driver",
+            report.cases
+        ))),
+    }
 }
 
 fn open_gpu() -> Result<raycaster::gpu::GpuRenderer, Failure> {

@@ -43,6 +43,8 @@ pub enum Command {
     Stitch(StitchArgs),
     /// `raycaster bench`: speed and error per scene and size.
     Bench(BenchArgs),
+    /// `raycaster selftest`: the built-in cases on the GPU against the reference.
+    Selftest,
     Help,
     /// `--version`, `-V`.
     Version,

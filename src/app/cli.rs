@@ -115,6 +115,7 @@ fn assemble(verb: Verb, given: Given, operand: Option<PathBuf>, seen: &[&str]) -
             size: given.size,
             keep_parts: given.keep_parts,
         })),
+        Verb::Selftest => Ok(Command::Selftest),
         Verb::Bench => Ok(Command::Bench(BenchArgs {
             quick: given.quick,
             runs: given.runs.unwrap_or(5),

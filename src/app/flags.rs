@@ -19,11 +19,12 @@ pub enum Verb {
     Batch = 2,
     Stitch = 3,
     Bench = 4,
+    Selftest = 5,
 }
 
 impl Verb {
     /// The verbs named by a first word, as typed.
-    const NAMED: [Verb; 4] = [Verb::Compare, Verb::Batch, Verb::Stitch, Verb::Bench];
+    const NAMED: [Verb; 5] = [Verb::Compare, Verb::Batch, Verb::Stitch, Verb::Bench, Verb::Selftest];
 
     pub fn name(self) -> &'static str {
         match self {
@@ -32,6 +33,7 @@ impl Verb {
             Verb::Batch => "batch",
             Verb::Stitch => "stitch",
             Verb::Bench => "bench",
+            Verb::Selftest => "selftest",
         }
     }
 
@@ -207,7 +209,7 @@ pub struct Flag {
     pub help: &'static str,
 }
 
-use Verb::{Batch, Bench, Compare, Render, Stitch};
+use Verb::{Batch, Bench, Compare, Render, Selftest, Stitch};
 
 /// The deepest `-bounces` (the reference recurses once per bounce).
 pub const MAX_BOUNCES: u64 = 1000;
@@ -574,7 +576,7 @@ pub fn unexpected_argument(text: &str, first: bool) -> UsageError {
 
 /// What each command is for, in help, after its synopsis: the verb, what it takes besides
 /// flags, and a paragraph.
-const COMMANDS: [(Verb, &str, &str); 4] = [
+const COMMANDS: [(Verb, &str, &str); 5] = [
     (
         Stitch,
         "",
@@ -592,6 +594,14 @@ const COMMANDS: [(Verb, &str, &str); 4] = [
   skipped. A failing line is reported with its number and the rest still run; the exit
   status is then 1. -q, -v and --threads belong on batch's own command line (on a line of
   FILE they are ignored).",
+    ),
+    (
+        Selftest,
+        "",
+        "Checks this machine's GPU and driver: renders built-in hard cases (degenerate and
+  edge-on triangles, far and squashed spheres, a horizon) and scenes like the course's on
+  the GPU and with the f64 reference, prints a table (case, outputs, pixels off, verdict)
+  with the adapter and driver, and exits 1 where the driver is not faithful.",
     ),
     (
         Bench,
@@ -700,7 +710,7 @@ mod tests {
         assert!(text.contains("raycaster batch FILE [--backend gpu|cpu|auto] [--shard K/N]\n"), "{text}");
         let compare = text.split("raycaster compare").nth(1).unwrap().split("  Renders").next().unwrap();
         assert!(!compare.contains("--backend") && !compare.contains("--tile"), "{compare}");
-        for verb in [Render, Compare, Batch, Stitch, Bench] {
+        for verb in [Render, Compare, Batch, Stitch, Bench, Selftest] {
             let lines = synopsis("raycaster", verb, "");
             assert!(lines.lines().all(|l| l.chars().count() <= WIDTH), "{lines}");
         }

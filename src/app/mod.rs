@@ -25,6 +25,7 @@ pub mod memory;
 pub mod output_file;
 pub mod part;
 pub mod progress;
+pub mod selftest;
 pub mod signals;
 pub mod stitch;
 pub mod validate;

@@ -17,7 +17,7 @@ pub fn check(command: &Command) -> Result<(), UsageError> {
         // compare writes no file, so two outputs may name one.
         Command::Compare { args, .. } => image_names(&args.files),
         Command::Stitch(args) => image_names(&args.files),
-        Command::Batch { .. } | Command::Bench(_) | Command::Help | Command::Version => Ok(()),
+        Command::Batch { .. } | Command::Bench(_) | Command::Selftest | Command::Help | Command::Version => Ok(()),
     }
 }
 
