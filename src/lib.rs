@@ -28,6 +28,7 @@ pub mod bvh;
 pub mod camera;
 pub mod clock;
 pub mod cpu;
+pub mod flip;
 pub mod gpu;
 pub mod grid;
 pub mod image_io;
