@@ -73,12 +73,22 @@ impl Graded {
         (!self.passed(), self.scores.as_ref().map_or(f64::INFINITY, |s| s.flip_mean))
     }
 
-    /// The line of the report on stdout.
-    pub fn report_line(&self) -> String {
+    /// How an image that was not judged is called: `MISSING` when there is no file,
+    /// `ERROR` when ours could not be rendered, `FAIL` for one unreadable or of another size.
+    fn not_judged_word(&self) -> &'static str {
+        match (&self.reference, &self.judged) {
+            (Err(_), _) => "ERROR",
+            (_, Err(why)) if why.starts_with("no file") => "MISSING",
+            _ => "FAIL",
+        }
+    }
+
+    /// The line of the report on stdout, the image's name padded to `width`.
+    pub fn report_line(&self, width: usize) -> String {
         let name = self.name.display().to_string();
         let line = self.line;
         match (&self.verdict, &self.scores) {
-            (Verdict::NotJudged(why), _) => format!("MISSING {name:<16} {why} (line {line})"),
+            (Verdict::NotJudged(why), _) => format!("{:<7} {name:<width$} {why} (line {line})", self.not_judged_word()),
             (verdict, Some(s)) => {
                 let word = if self.passed() { "pass" } else { "FAIL" };
                 let why = match verdict {
@@ -87,11 +97,11 @@ impl Graded {
                 };
                 let trouble = self.trouble.as_ref().map_or(String::new(), |t| format!("; {t}"));
                 format!(
-                    "{word:<7} {name:<16} FLIP mean {:.4}  p99 {:.4}  {} px off{why} (line {line}{trouble})",
+                    "{word:<7} {name:<width$} FLIP mean {:.4}  p99 {:.4}  {} px off{why} (line {line}{trouble})",
                     s.flip_mean, s.flip_p99, s.off
                 )
             }
-            (_, None) => format!("MISSING {name:<16} (line {line})"),
+            (_, None) => format!("MISSING {name:<width$} (line {line})"),
         }
     }
 }
@@ -225,7 +235,8 @@ fn read(path: &Path) -> Result<RgbImage, String> {
 
 /// The report on stdout: a line per image, then the count.
 pub fn report(graded: &[Graded]) -> String {
-    let mut text: String = graded.iter().map(|g| g.report_line() + "\n").collect();
+    let width = graded.iter().map(|g| g.name.display().to_string().chars().count()).max().unwrap_or(0);
+    let mut text: String = graded.iter().map(|g| g.report_line(width) + "\n").collect();
     let passed = graded.iter().filter(|g| g.passed()).count();
     text += &format!("grade: {passed} of {} images pass\n", graded.len());
     text
@@ -261,7 +272,7 @@ pub fn write_html(path: &Path, args: &GradeArgs, graded: &[Graded]) -> Result<()
 }
 
 fn card(g: &Graded) -> Card {
-    let mut lines = vec![format!("line {}: {}", g.line, g.command), g.report_line()];
+    let mut lines = vec![format!("line {}: {}", g.line, g.command), g.report_line(0)];
     lines.extend(g.trouble.clone());
     if !g.stderr_tail.is_empty() {
         lines.push(format!("the program's stderr, last lines:\n{}", g.stderr_tail));
