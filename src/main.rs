@@ -2,7 +2,9 @@
 
 mod app;
 
-use app::args::{BackendChoice, BenchArgs, Command, GradeArgs, Habits, RenderArgs, Split, StitchArgs, Verbosity};
+use app::args::{
+    BackendChoice, BenchArgs, Command, GalleryArgs, GradeArgs, Habits, RenderArgs, Split, StitchArgs, Verbosity,
+};
 use app::backend::Backend;
 use app::exit::{self, note, say, Failure};
 use app::job::LineReport;
@@ -43,6 +45,7 @@ fn run() -> Result<(), Failure> {
         Command::Stitch(stitch_args) => stitch(&stitch_args, habits),
         Command::Bench(bench_args) => bench(&bench_args, habits),
         Command::Grade(grade_args) => grade(&grade_args, habits),
+        Command::Gallery(gallery_args) => gallery(&gallery_args, habits),
     }
 }
 
@@ -238,6 +241,26 @@ fn grade(args: &GradeArgs, habits: Habits) -> Result<(), Failure> {
     }
     if failed > 0 {
         return Err(Failure::Failed(format!("grade: {failed} of {} images do not pass", graded.len())));
+    }
+    Ok(())
+}
+
+/// `raycaster gallery`: the page, and a line saying what it holds.
+fn gallery(args: &GalleryArgs, habits: Habits) -> Result<(), Failure> {
+    let backend = open_backend(args.backend, habits)?;
+    let quiet = habits.verbosity == Verbosity::Quiet;
+    let count = app::gallery::gallery(args, &backend, !quiet).map_err(|e| Failure::Failed(format!("gallery: {e}")))?;
+    exit::print(&format!(
+        "gallery: {} images ({} beside the course's own) in {}\n",
+        count.images,
+        count.with_course_image,
+        args.html.display()
+    ))?;
+    if count.failed_lines > 0 {
+        return Err(Failure::Failed(format!(
+            "gallery: {} command lines failed to render (named on the page)",
+            count.failed_lines
+        )));
     }
     Ok(())
 }

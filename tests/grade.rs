@@ -1,7 +1,8 @@
 //! `raycaster grade` as a teacher runs it on the course's assignment 4: a student's images
 //! judged against our render, line by line; images changed as a student's mistakes change
 //! them caught, and those FLIP cannot tell apart passed; a student's program that crashes,
-//! hangs or writes nothing judged, never the grader's failure.
+//! hangs or writes nothing judged, never the grader's failure. `raycaster gallery` on a
+//! course folder of our own scenes.
 
 mod common;
 
@@ -122,6 +123,18 @@ fn render_line(dir: &Path, line: &str) {
     assert!(result.status.success(), "{line}: {}", stderr(&result));
 }
 
+/// The README's pictures (`scenes/gallery/`, rendered from `commands.txt` there) are what
+/// the binary renders today: graded against it, all pass. Needs no course files.
+#[test]
+fn the_readme_gallery_is_what_we_render() {
+    let gallery = common::scenes_dir().join("gallery");
+    let result = grade(&[path_str(&gallery), "--images", path_str(&gallery), "-q"]);
+    let report = stdout(&result);
+    assert!(result.status.success(), "{report}{}", stderr(&result));
+    assert!(report.ends_with("grade: 5 of 5 images pass\n"), "{report}");
+    assert!(line_of(&report, "showcase.png").contains("FLIP mean 0.0000"), "{report}");
+}
+
 /// A four-line assignment: the first four lines of the course's assignment 4.
 fn short_assignment(a4: &Path) -> tempfile::TempDir {
     let folder = tempfile::tempdir().unwrap();
@@ -217,16 +230,64 @@ fn bad_usage_exits_2_naming_the_flag() {
     let assignment = tempfile::tempdir().unwrap();
     std::fs::write(assignment.path().join("commands.txt"), "-input s.txt -size 8 8 -output o.tga\n").unwrap();
     let folder = path_str(assignment.path());
-    let cases: [(&[&str], &str); 5] = [
+    let cases: [(&[&str], &str); 6] = [
         (&["grade", folder], "grade: give --images DIR"),
         (&["grade", path_str(empty.path()), "--images", "."], "no commands.txt there"),
         (&["grade", folder, "--images", "/nonexistent/images"], "--images /nonexistent/images: not a folder"),
         (&["grade", folder, "--images", ".", "--html", path_str(empty.path())], "--html"),
         (&["grade", folder, "--run", "rt", "--time-limit", "soon"], "--time-limit: 'soon'"),
+        (&["gallery", "/nonexistent/corpus", "--html", "g.html"], "gallery /nonexistent/corpus: not a folder"),
     ];
     for (args, message) in cases {
         let result = command().args(args).output().unwrap();
         assert_eq!(result.status.code(), Some(2), "{args:?}: {}", stderr(&result));
         assert!(stderr(&result).contains(message), "{args:?}: {}", stderr(&result));
     }
+}
+
+/// The gallery of a course folder of our own scenes: each image ours, the course's where
+/// `expected/` has it, and the FLIP map of the pair.
+#[test]
+fn the_gallery_shows_ours_beside_the_course_images() {
+    let corpus = tempfile::tempdir().unwrap();
+    let a2 = corpus.path().join("a2");
+    std::fs::create_dir_all(a2.join("expected")).unwrap();
+    for scene in ["triangles.txt", "spheres_ortho.txt"] {
+        std::fs::copy(common::scenes_dir().join(scene), a2.join(scene)).unwrap();
+    }
+    std::fs::write(
+        a2.join("commands.txt"),
+        "-input triangles.txt -size 64 48 -output tri.tga -normals tri_n.tga\n\
+         # a comment\n-input spheres_ortho.txt -size 40 40 -output spheres.tga -gui\n-input spheres_ortho.txt -size 8 8 -gui\n",
+    )
+    .unwrap();
+    // The course's image of tri.tga: ours, one pixel changed (the map shows it).
+    let ours = corpus.path().join("ours.png");
+    let render = command()
+        .args(["-input", "triangles.txt", "-size", "64", "48", "-output", path_str(&ours), "--backend", "cpu"])
+        .current_dir(&a2)
+        .output()
+        .unwrap();
+    assert!(render.status.success(), "{}", stderr(&render));
+    let mut course = read(&ours);
+    course.put_pixel(10, 10, image::Rgb([255, 255, 0]));
+    course.save(a2.join("expected/tri.png")).unwrap();
+
+    let html = corpus.path().join("out/gallery.html");
+    let result = command()
+        .args(["gallery", path_str(corpus.path()), "--html", path_str(&html), "--backend", "cpu", "-q"])
+        .output()
+        .unwrap();
+    assert!(result.status.success(), "{}", stderr(&result));
+    assert!(stdout(&result).starts_with("gallery: 3 images (1 beside the course's own)"), "{}", stdout(&result));
+    let page = std::fs::read_to_string(&html).unwrap();
+    assert!(page.contains("<h2 id=\"a2\">a2: 2 command lines</h2>"), "the preview-only line is left out");
+    for name in ["tri.tga", "tri_n.tga", "spheres.tga"] {
+        assert!(page.contains(&format!("<h3>{name}</h3>")), "{name}");
+    }
+    assert_eq!(page.matches("<img src=").count(), 3 + 2, "three of ours, the course's and the map");
+    let map = read(&html.parent().unwrap().join("gallery_files/0003.png"));
+    let black = raycaster::flip::MAGMA[0];
+    assert_ne!(map.get_pixel(10, 10).0, black, "the changed pixel shows on the map");
+    assert_eq!(map.get_pixel(60, 40).0, black, "far from it nothing does");
 }

@@ -45,6 +45,8 @@ pub enum Command {
     Bench(BenchArgs),
     /// `raycaster grade`: a student's images for an assignment against ours.
     Grade(GradeArgs),
+    /// `raycaster gallery`: every assignment's images, ours beside the course's, on a page.
+    Gallery(GalleryArgs),
     Help,
     /// `--version`, `-V`.
     Version,
@@ -250,6 +252,15 @@ pub struct Thresholds {
     pub max_flip_p99: f64,
     /// Pixels more than 1 level off; no limit by default (FLIP judges what is visible).
     pub max_diff_pixels: Option<u64>,
+}
+
+/// `raycaster gallery`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GalleryArgs {
+    /// The course's files: `a2/` … `a7/`.
+    pub corpus: PathBuf,
+    pub html: PathBuf,
+    pub backend: BackendChoice,
 }
 
 /// How much the program says on stderr besides errors.

@@ -7,9 +7,9 @@
 //! are one line naming the flag; the binary exits with status 2 on them.
 
 use crate::app::args::{
-    BackendChoice, BenchArgs, Command, CommandLine, DepthArgs, GradeArgs, Habits, Judged, Picture, RenderArgs, Split,
-    StitchArgs, Thresholds, UsageError, Verbosity, DEFAULT_MAX_FLIP_MEAN, DEFAULT_MAX_FLIP_P99, DEFAULT_TIME_LIMIT,
-    MAX_PIXELS, MAX_SIDE,
+    BackendChoice, BenchArgs, Command, CommandLine, DepthArgs, GalleryArgs, GradeArgs, Habits, Judged, Picture,
+    RenderArgs, Split, StitchArgs, Thresholds, UsageError, Verbosity, DEFAULT_MAX_FLIP_MEAN, DEFAULT_MAX_FLIP_P99,
+    DEFAULT_TIME_LIMIT, MAX_PIXELS, MAX_SIDE,
 };
 use crate::app::flags::{self, flag_name, Answer, Flag, Given, Takes, Verb};
 use raycaster::grid::GridSize;
@@ -83,7 +83,7 @@ fn flag_for(verb: Verb, name: &str, text: &str) -> Result<&'static Flag, UsageEr
 fn take_operand(verb: Verb, raw: OsString, text: &str, have_one: bool, first: bool) -> Result<PathBuf, UsageError> {
     match verb {
         Verb::Render | Verb::Compare => Err(flags::unexpected_argument(text, first)),
-        Verb::Batch | Verb::Grade if !have_one => Ok(PathBuf::from(raw)),
+        Verb::Batch | Verb::Grade | Verb::Gallery if !have_one => Ok(PathBuf::from(raw)),
         _ => Err(UsageError(format!("{}unexpected argument '{text}'", verb.context()))),
     }
 }
@@ -124,6 +124,11 @@ fn assemble(verb: Verb, given: Given, operand: Option<PathBuf>, seen: &[&str]) -
             only: given.only,
         })),
         Verb::Grade => grade(given, operand),
+        Verb::Gallery => Ok(Command::Gallery(GalleryArgs {
+            corpus: operand.ok_or_else(|| UsageError("gallery expects the course's folder (with a2, a3, …)".into()))?,
+            html: given.html.expect("required"),
+            backend: given.backend.unwrap_or_default(),
+        })),
     }
 }
 
@@ -697,7 +702,7 @@ mod tests {
     /// `grade`: the reference renders by default, the thresholds are the documented ones,
     /// and the student's images come from exactly one of `--images` and `--run`.
     #[test]
-    fn grade_defaults_and_values() {
+    fn grade_and_gallery_defaults_and_values() {
         let thresholds = Thresholds {
             max_flip_mean: DEFAULT_MAX_FLIP_MEAN,
             max_flip_p99: DEFAULT_MAX_FLIP_P99,
@@ -731,6 +736,12 @@ mod tests {
             }
             other => panic!("{other:?}"),
         }
+        match parse("gallery corpus --html g.html") {
+            Ok(Command::Gallery(g)) => {
+                assert_eq!((g.corpus, g.html, g.backend), ("corpus".into(), "g.html".into(), BackendChoice::Auto))
+            }
+            other => panic!("{other:?}"),
+        }
         // Help states the defaults the code uses.
         let usage = flags::usage();
         for default in [DEFAULT_MAX_FLIP_MEAN, DEFAULT_MAX_FLIP_P99, DEFAULT_TIME_LIMIT] {
@@ -749,6 +760,8 @@ mod tests {
             ("grade a4 a5 --images s", "grade: unexpected argument 'a5'"),
             ("grade a4 --images s --max-flip-mean -1", "--max-flip-mean"),
             ("grade a4 --images s --outputs color", "grade: unknown flag '--outputs'"),
+            ("gallery corpus", "-html FILE is required"),
+            ("gallery --html g.html", "gallery expects the course's folder (with a2, a3, …)"),
         ];
         for (line, message) in errors {
             let err = parse(line).expect_err(line);

@@ -20,11 +20,12 @@ pub enum Verb {
     Stitch = 3,
     Bench = 4,
     Grade = 5,
+    Gallery = 6,
 }
 
 impl Verb {
     /// The verbs named by a first word, as typed.
-    const NAMED: [Verb; 5] = [Verb::Compare, Verb::Batch, Verb::Stitch, Verb::Bench, Verb::Grade];
+    const NAMED: [Verb; 6] = [Verb::Compare, Verb::Batch, Verb::Stitch, Verb::Bench, Verb::Grade, Verb::Gallery];
 
     pub fn name(self) -> &'static str {
         match self {
@@ -34,6 +35,7 @@ impl Verb {
             Verb::Stitch => "stitch",
             Verb::Bench => "bench",
             Verb::Grade => "grade",
+            Verb::Gallery => "gallery",
         }
     }
 
@@ -67,7 +69,7 @@ impl Verbs {
         Verbs(bits)
     }
 
-    const EVERY: Verbs = Verbs(0b11_1111);
+    const EVERY: Verbs = Verbs(0b111_1111);
     const NONE: Verbs = Verbs(0);
 
     pub fn contains(self, verb: Verb) -> bool {
@@ -121,7 +123,7 @@ pub struct Given {
     pub run: Option<String>,
     /// `grade --time-limit S`.
     pub time_limit: Option<f64>,
-    /// `grade --html FILE`.
+    /// `grade --html FILE`, `gallery --html FILE`.
     pub html: Option<PathBuf>,
     /// `grade --max-flip-mean X`.
     pub max_flip_mean: Option<f64>,
@@ -221,7 +223,7 @@ pub struct Flag {
     pub help: &'static str,
 }
 
-use Verb::{Batch, Bench, Compare, Grade, Render, Stitch};
+use Verb::{Batch, Bench, Compare, Gallery, Grade, Render, Stitch};
 
 /// The deepest `-bounces` (the reference recurses once per bounce).
 pub const MAX_BOUNCES: u64 = 1000;
@@ -357,7 +359,7 @@ pub static FLAGS: &[Flag] = &[
             names: || BackendChoice::ALL.map(BackendChoice::name).to_vec(),
             set: |g, k| g.backend = Some(BackendChoice::ALL[k]),
         },
-        Verbs::of(&[Render, Batch, Grade]),
+        Verbs::of(&[Render, Batch, Grade, Gallery]),
     )
     .refused(Compare, "compare always renders with both the GPU and the f64 reference")
     .help(
@@ -482,7 +484,8 @@ pub static FLAGS: &[Flag] = &[
         Verbs::of(&[Grade]),
     )
     .help("the FLIP error 99 % of an image's pixels may not pass (default\n0.25)"),
-    Flag::ours("html", "FILE", Takes::Path(|g, path| g.html = Some(path)), Verbs::of(&[Grade]))
+    Flag::ours("html", "FILE", Takes::Path(|g, path| g.html = Some(path)), Verbs::of(&[Grade, Gallery]))
+        .required(Verbs::of(&[Gallery]))
         .once()
         .help("an HTML page of the images, with FILE_files/ beside it for them"),
 ];
@@ -626,7 +629,7 @@ pub fn unexpected_argument(text: &str, first: bool) -> UsageError {
 
 /// What each command is for, in help, after its synopsis: the verb, what it takes besides
 /// flags, and a paragraph.
-const COMMANDS: [(Verb, &str, &str); 5] = [
+const COMMANDS: [(Verb, &str, &str); 6] = [
     (
         Stitch,
         "",
@@ -671,6 +674,13 @@ const COMMANDS: [(Verb, &str, &str); 5] = [
   largest) and by the pixels more than 1 level off. Prints a line per image and exits 0 when
   every image passes, 1 when any fails or is missing. The images come from --images DIR or
   from --run COMMAND; a crash, a time-out or a missing file is that image's verdict.",
+    ),
+    (
+        Gallery,
+        "CORPUS",
+        "Renders every command line of the course's assignment folders under CORPUS (a2 … a7)
+  onto one HTML page, beside the course's own image from aN/expected/ where there is one,
+  with the FLIP map between them.",
     ),
 ];
 

@@ -26,6 +26,12 @@ pub fn check(command: &Command) -> Result<(), UsageError> {
             }
             args.html.as_deref().map_or(Ok(()), html_name)
         }
+        Command::Gallery(args) => {
+            if !args.corpus.is_dir() {
+                return Err(UsageError(format!("gallery {}: not a folder", args.corpus.display())));
+            }
+            html_name(&args.html)
+        }
         Command::Batch { .. } | Command::Bench(_) | Command::Help | Command::Version => Ok(()),
     }
 }

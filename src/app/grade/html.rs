@@ -1,4 +1,4 @@
-//! The page `grade --html` writes: one self-contained HTML file, with its
+//! The pages `grade --html` and `gallery` write: one self-contained HTML file, with its
 //! images as PNG files in a folder beside it (`report.html` → `report_files/`), so that the
 //! two can be copied or zipped together and opened in any browser, offline.
 
@@ -6,11 +6,12 @@ use image::RgbImage;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-/// How a card is marked: `grade`'s verdict.
+/// How a card is marked: a verdict of `grade`, or plain (the gallery).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Mark {
     Pass,
     Fail,
+    Plain,
 }
 
 /// One picture of a card, or why there is none.
@@ -34,6 +35,10 @@ pub struct Page {
     files: PathBuf,
     body: String,
     images: usize,
+    /// Each section's anchor and heading, for the links on top.
+    sections: Vec<(String, String)>,
+    /// Cards side by side, as many as the window holds (the gallery), rather than one a row.
+    tiled: bool,
 }
 
 impl Page {
@@ -42,7 +47,18 @@ impl Page {
         let stem = path.file_stem().map_or("report".into(), |s| s.to_string_lossy().into_owned());
         let files = path.with_file_name(format!("{stem}_files"));
         std::fs::create_dir_all(&files).map_err(|e| format!("{}: {e}", files.display()))?;
-        Ok(Page { path: path.to_path_buf(), files, body: String::new(), images: 0 })
+        Ok(Page { path: path.to_path_buf(), files, body: String::new(), images: 0, sections: Vec::new(), tiled: false })
+    }
+
+    /// Cards side by side: a page of many images with one or two pictures each.
+    pub fn tiled(self) -> Page {
+        Page { tiled: true, ..self }
+    }
+
+    /// A section's heading, linked from the top of the page as `id`.
+    pub fn section(&mut self, id: &str, text: &str) {
+        let _ = writeln!(self.body, "<h2 id=\"{}\">{}</h2>", escape(id), escape(text));
+        self.sections.push((id.to_string(), text.to_string()));
     }
 
     /// A paragraph of text (escaped).
@@ -55,6 +71,7 @@ impl Page {
         let class = match card.mark {
             Mark::Pass => "card pass",
             Mark::Fail => "card fail",
+            Mark::Plain => "card",
         };
         let _ = writeln!(self.body, "<div class=\"{class}\"><h3>{}</h3>", escape(&card.title));
         for line in &card.lines {
@@ -74,9 +91,16 @@ impl Page {
 
     /// Writes the HTML file, `title` on top.
     pub fn finish(self, title: &str) -> Result<(), String> {
+        let links: Vec<String> = self
+            .sections
+            .iter()
+            .map(|(id, text)| format!("<a href=\"#{}\">{}</a>", escape(id), escape(text)))
+            .collect();
+        let nav = if links.is_empty() { String::new() } else { format!("<nav>{}</nav>\n", links.join(" · ")) };
         let html = format!(
             "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\
-             <title>{title}</title><style>{STYLE}</style></head>\n<body><h1>{title}</h1>\n{}</body></html>\n",
+             <title>{title}</title><style>{STYLE}</style></head>\n<body class=\"{}\"><h1>{title}</h1>\n{nav}{}</body></html>\n",
+            if self.tiled { "tiled" } else { "" },
             self.body,
             title = escape(title)
         );
@@ -98,6 +122,8 @@ const STYLE: &str = "body{font-family:sans-serif;margin:1em 2em;background:#f4f4
 h3{margin:.2em 0;font-family:monospace}\
 .card{background:#fff;border:1px solid #ccc;border-left:8px solid #999;margin:.8em 0;padding:.5em 1em}\
 .card.pass{border-left-color:#3a3}.card.fail{border-left-color:#d22}\
+.tiled .card{display:inline-block;vertical-align:top;margin-right:.8em;max-width:860px}\
+.tiled .line{max-width:380px}.tiled img{width:180px;min-width:0}nav{margin-bottom:1em}\
 .line{font-family:monospace;font-size:90%;white-space:pre-wrap}\
 .panels{display:flex;flex-wrap:wrap;gap:1em;margin-top:.5em}\
 figure{margin:0}figcaption{font-size:85%;color:#444;max-width:260px}\
