@@ -144,7 +144,14 @@ pub fn grade(args: &GradeArgs, backend: &Backend, progress: bool) -> Result<Vec<
         for name in &line.images {
             let reference = rendered.clone().and_then(|()| read(&ours.path().join(name)));
             let judged = match (&args.judged, judged_dir) {
-                (_, Some(dir)) => read(&dir.join(name)),
+                // The copy is deleted afterwards: its path would only puzzle the reader.
+                (_, Some(dir)) => read(&dir.join(name)).map_err(|e| {
+                    if dir.join(name).exists() {
+                        e
+                    } else {
+                        "no file written".to_string()
+                    }
+                }),
                 (Judged::Images(dir), None) => find_image(dir, name).and_then(|path| read(&path)),
                 (Judged::Run { .. }, None) => unreachable!("a run has its workspace"),
             };
@@ -273,7 +280,6 @@ pub fn write_html(path: &Path, args: &GradeArgs, graded: &[Graded]) -> Result<()
 
 fn card(g: &Graded) -> Card {
     let mut lines = vec![format!("line {}: {}", g.line, g.command), g.report_line(0)];
-    lines.extend(g.trouble.clone());
     if !g.stderr_tail.is_empty() {
         lines.push(format!("the program's stderr, last lines:\n{}", g.stderr_tail));
     }

@@ -113,7 +113,7 @@ impl Page {
         let name = format!("{:04}.png", self.images);
         raycaster::image_io::write_image(&self.files.join(&name), image).map_err(|e| e.to_string())?;
         let folder = self.files.file_name().expect("named after the page").to_string_lossy();
-        Ok(format!("{}/{name}", escape(&folder)))
+        Ok(format!("{}/{name}", escape(&url_path(&folder))))
     }
 }
 
@@ -131,17 +131,24 @@ img{min-width:200px;max-width:400px;image-rendering:pixelated;border:1px solid #
 .absent{width:200px;height:200px;display:flex;align-items:center;justify-content:center;\
 text-align:center;background:#fee;color:#900;border:1px dashed #d22;font-size:90%;padding:4px;box-sizing:border-box}";
 
+/// A file name as a relative URL: the characters a URL reads otherwise (a space, `#`, `?`,
+/// `%`) percent-encoded, so that `my report.html`'s pictures are found.
+fn url_path(name: &str) -> String {
+    replaced(name, &[('%', "%25"), (' ', "%20"), ('#', "%23"), ('?', "%3F")])
+}
+
 /// Text made safe to put between HTML tags or in an attribute.
 pub fn escape(text: &str) -> String {
+    replaced(text, &[('&', "&amp;"), ('<', "&lt;"), ('>', "&gt;"), ('"', "&quot;"), ('\'', "&#39;")])
+}
+
+/// `text` with each character of `table` replaced by its text.
+fn replaced(text: &str, table: &[(char, &str)]) -> String {
     let mut out = String::with_capacity(text.len());
     for c in text.chars() {
-        match c {
-            '&' => out.push_str("&amp;"),
-            '<' => out.push_str("&lt;"),
-            '>' => out.push_str("&gt;"),
-            '"' => out.push_str("&quot;"),
-            '\'' => out.push_str("&#39;"),
-            c => out.push(c),
+        match table.iter().find(|(from, _)| *from == c) {
+            Some((_, to)) => out.push_str(to),
+            None => out.push(c),
         }
     }
     out
@@ -150,6 +157,12 @@ pub fn escape(text: &str) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn folder_names_are_urls() {
+        assert_eq!(url_path("my report #2?_files"), "my%20report%20%232%3F_files");
+        assert_eq!(url_path("100%_files"), "100%25_files");
+    }
 
     #[test]
     fn text_is_escaped() {
