@@ -4,6 +4,8 @@
 //! Data flows one way: scene text → [`scene`] (parsed model) → [`gpu`] (flattened buffers and
 //! the WGSL kernel) or [`cpu`] (the reference, which walks the model itself) →
 //! [`render::Frame`] (float buffers) → [`image_io`] (8-bit images, TGA or PNG).
+//! [`metrics`] says how far two renders are apart in levels and floats, [`flip`] how visible
+//! the difference between two images is (NVIDIA's ꟻLIP, which `raycaster grade` judges with).
 //! The command line (`src/main.rs`, `src/app/`) is a thin layer over this library.
 //!
 //! ```no_run
@@ -28,6 +30,7 @@ pub mod bvh;
 pub mod camera;
 pub mod clock;
 pub mod cpu;
+pub mod flip;
 pub mod gpu;
 pub mod grid;
 pub mod image_io;

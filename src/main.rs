@@ -2,7 +2,9 @@
 
 mod app;
 
-use app::args::{BackendChoice, BenchArgs, Command, Habits, RenderArgs, Split, StitchArgs, Verbosity};
+use app::args::{
+    BackendChoice, BenchArgs, Command, GalleryArgs, GradeArgs, Habits, RenderArgs, Split, StitchArgs, Verbosity,
+};
 use app::backend::Backend;
 use app::exit::{self, note, say, Failure};
 use app::job::LineReport;
@@ -42,6 +44,8 @@ fn run() -> Result<(), Failure> {
         Command::Batch { file, backend, shard } => batch(&file, backend, shard, habits),
         Command::Stitch(stitch_args) => stitch(&stitch_args, habits),
         Command::Bench(bench_args) => bench(&bench_args, habits),
+        Command::Grade(grade_args) => grade(&grade_args, habits),
+        Command::Gallery(gallery_args) => gallery(&gallery_args, habits),
         Command::Selftest => selftest(),
     }
 }
@@ -212,6 +216,52 @@ fn bench(args: &BenchArgs, habits: Habits) -> Result<(), Failure> {
             args.out.display(),
             if cfg!(feature = "plot") { " and bench.png" } else { "" }
         ));
+    }
+    Ok(())
+}
+
+/// `raycaster grade`: the report on stdout (and the page), then the verdict: 1 when any
+/// image fails or is missing.
+fn grade(args: &GradeArgs, habits: Habits) -> Result<(), Failure> {
+    let backend = open_backend(args.backend, habits)?;
+    let quiet = habits.verbosity == Verbosity::Quiet;
+    let graded = app::grade::grade(args, &backend, !quiet).map_err(|e| Failure::Failed(format!("grade: {e}")))?;
+    exit::print(&app::grade::report(&graded))?;
+    if let Some(html) = &args.html {
+        app::grade::write_html(html, args, &graded).map_err(|e| Failure::Failed(format!("grade: {e}")))?;
+        if !quiet {
+            say(&format!("grade: wrote {}", html.display()));
+        }
+    }
+    let failed = graded.iter().filter(|g| !g.passed()).count();
+    if graded.is_empty() {
+        return Err(Failure::Failed(format!(
+            "grade: {}: no command line writes an image",
+            args.assignment.join("commands.txt").display()
+        )));
+    }
+    if failed > 0 {
+        return Err(Failure::Failed(format!("grade: {failed} of {} images do not pass", graded.len())));
+    }
+    Ok(())
+}
+
+/// `raycaster gallery`: the page, and a line saying what it holds.
+fn gallery(args: &GalleryArgs, habits: Habits) -> Result<(), Failure> {
+    let backend = open_backend(args.backend, habits)?;
+    let quiet = habits.verbosity == Verbosity::Quiet;
+    let count = app::gallery::gallery(args, &backend, !quiet).map_err(|e| Failure::Failed(format!("gallery: {e}")))?;
+    exit::print(&format!(
+        "gallery: {} images ({} beside the course's own) in {}\n",
+        count.images,
+        count.with_course_image,
+        args.html.display()
+    ))?;
+    if count.failed_lines > 0 {
+        return Err(Failure::Failed(format!(
+            "gallery: {} command lines failed to render (named on the page)",
+            count.failed_lines
+        )));
     }
     Ok(())
 }

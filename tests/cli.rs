@@ -262,7 +262,7 @@ fn batch_runs_every_line_and_reports_failures() {
 
 /// The bench's quick version runs in seconds and writes a table, a CSV and a plot whose
 /// rows carry both a speed and an error (so the bench cannot rot unnoticed), one of them an
-/// A4 line whose rays are all counted, and one of 4 samples per pixel.
+/// A4 line whose rays are all counted, and one of 4 samples per pixel; the plot has its text.
 #[test]
 fn bench_quick_writes_table_csv_and_plot() {
     let Some(corpus) = common::corpus() else { return };
@@ -299,6 +299,12 @@ fn bench_quick_writes_table_csv_and_plot() {
     }
     let png = std::fs::read(dir.path().join("bench.png")).unwrap();
     assert_eq!(&png[1..4], b"PNG");
+    // The caption is drawn (from the font inside the binary): dark pixels in the band above
+    // the chart, which is white but for it.
+    let plot = raycaster::image_io::read_image(&dir.path().join("bench.png")).unwrap();
+    let caption = (0..plot.width()).flat_map(|x| (0..35).map(move |y| (x, y)));
+    let dark = caption.filter(|&(x, y)| plot.get_pixel(x, y).0.iter().all(|&c| c < 100)).count();
+    assert!(dark > 200, "{dark} dark pixels where the caption's text should be");
 }
 
 /// `compare` holds the GPU to the parity contract by default (at most 0.1 % of an output's

@@ -43,6 +43,10 @@ pub enum Command {
     Stitch(StitchArgs),
     /// `raycaster bench`: speed and error per scene and size.
     Bench(BenchArgs),
+    /// `raycaster grade`: a student's images for an assignment against ours.
+    Grade(GradeArgs),
+    /// `raycaster gallery`: every assignment's images, ours beside the course's, on a page.
+    Gallery(GalleryArgs),
     /// `raycaster selftest`: the built-in cases on the GPU against the reference.
     Selftest,
     Help,
@@ -206,6 +210,59 @@ pub struct BenchArgs {
     pub corpus: PathBuf,
     /// Only the cases whose name contains this.
     pub only: Option<String>,
+}
+
+/// The FLIP mean an image may have and pass (`--max-flip-mean`). Measured on the course's
+/// assignment 4 against our renders (docs/grading.md): a ±1-level dither scores 0.011 to
+/// 0.016, every channel one level up 0.030 to 0.039 (a rounding choice, not a mistake); a
+/// missing shadow, a camera moved by 2 % of its distance or swapped colour channels score
+/// medians of 0.20 to 0.25.
+pub const DEFAULT_MAX_FLIP_MEAN: f64 = 0.05;
+/// The FLIP error that 99 % of an image's pixels may not exceed and pass (`--max-flip-p99`):
+/// a small region badly wrong fails where the mean passes it. The dither and the one-level
+/// offset stay below 0.06; a missing shadow or a moved camera gives 0.45 at the least.
+pub const DEFAULT_MAX_FLIP_P99: f64 = 0.25;
+/// How long a student's program may take on one command line (`--time-limit`), seconds.
+pub const DEFAULT_TIME_LIMIT: f64 = 60.0;
+
+/// `raycaster grade`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GradeArgs {
+    /// The assignment's folder: its `commands.txt`, scenes and meshes.
+    pub assignment: PathBuf,
+    pub judged: Judged,
+    /// `--html FILE`: the report with the pictures.
+    pub html: Option<PathBuf>,
+    /// What renders our images (default: the f64 reference, the ground truth).
+    pub backend: BackendChoice,
+    pub thresholds: Thresholds,
+}
+
+/// Where the student's images come from.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Judged {
+    /// `--images DIR`: a folder of them, named as the command lines name them.
+    Images(PathBuf),
+    /// `--run COMMAND`: their program, run on each command line with a time limit (s).
+    Run { command: String, time_limit: f64 },
+}
+
+/// What an image must stay within to pass.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Thresholds {
+    pub max_flip_mean: f64,
+    pub max_flip_p99: f64,
+    /// Pixels more than 1 level off; no limit by default (FLIP judges what is visible).
+    pub max_diff_pixels: Option<u64>,
+}
+
+/// `raycaster gallery`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GalleryArgs {
+    /// The course's files: `a2/` … `a7/`.
+    pub corpus: PathBuf,
+    pub html: PathBuf,
+    pub backend: BackendChoice,
 }
 
 /// How much the program says on stderr besides errors.

@@ -577,6 +577,7 @@ pub fn plot(rows: &[Row], path: &Path) -> Result<(), raycaster::image_io::ImageE
     use plotters::prelude::*;
     const SIZE: (u32, u32) = (900, 600);
     let fail = |e: String| raycaster::image_io::ImageError { path: path.to_path_buf(), message: e };
+    register_plot_font().map_err(fail)?;
     let mut buffer = vec![255u8; (SIZE.0 * SIZE.1 * 3) as usize];
     {
         let points: Vec<(f64, f64, bool, String)> = rows
@@ -615,6 +616,17 @@ pub fn plot(rows: &[Row], path: &Path) -> Result<(), raycaster::image_io::ImageE
     }
     let image = image::RgbImage::from_raw(SIZE.0, SIZE.1, buffer).expect("sized buffer");
     raycaster::image_io::write_image(path, &image)
+}
+
+/// The plot's font, inside the binary: plotters' `ttf` text looked fonts up through
+/// fontconfig and drew them with FreeType, so the binary needed both (and their libpng,
+/// libexpat, libbrotli, libz) on every machine it ran on. `ab_glyph` draws this one in Rust.
+/// DejaVu Sans cut to Latin-1 and a few symbols (17 KB; assets/fonts/LICENSE-DejaVu.txt).
+#[cfg(feature = "plot")]
+fn register_plot_font() -> Result<(), String> {
+    const DEJAVU_SANS: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans-subset.ttf");
+    plotters::style::register_font("sans-serif", plotters::style::FontStyle::Normal, DEJAVU_SANS)
+        .map_err(|_| "the embedded font (assets/fonts) does not parse".to_string())
 }
 
 /// A log-scale axis range around the values, a factor of 2 beyond each end.

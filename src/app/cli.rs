@@ -7,8 +7,9 @@
 //! are one line naming the flag; the binary exits with status 2 on them.
 
 use crate::app::args::{
-    BenchArgs, Command, CommandLine, DepthArgs, Habits, Picture, RenderArgs, Split, StitchArgs, UsageError, Verbosity,
-    MAX_PIXELS, MAX_SIDE,
+    BackendChoice, BenchArgs, Command, CommandLine, DepthArgs, GalleryArgs, GradeArgs, Habits, Judged, Picture,
+    RenderArgs, Split, StitchArgs, Thresholds, UsageError, Verbosity, DEFAULT_MAX_FLIP_MEAN, DEFAULT_MAX_FLIP_P99,
+    DEFAULT_TIME_LIMIT, MAX_PIXELS, MAX_SIDE,
 };
 use crate::app::flags::{self, flag_name, Answer, Flag, Given, Takes, Verb};
 use raycaster::grid::GridSize;
@@ -82,7 +83,7 @@ fn flag_for(verb: Verb, name: &str, text: &str) -> Result<&'static Flag, UsageEr
 fn take_operand(verb: Verb, raw: OsString, text: &str, have_one: bool, first: bool) -> Result<PathBuf, UsageError> {
     match verb {
         Verb::Render | Verb::Compare => Err(flags::unexpected_argument(text, first)),
-        Verb::Batch if !have_one => Ok(PathBuf::from(raw)),
+        Verb::Batch | Verb::Grade | Verb::Gallery if !have_one => Ok(PathBuf::from(raw)),
         _ => Err(UsageError(format!("{}unexpected argument '{text}'", verb.context()))),
     }
 }
@@ -123,7 +124,47 @@ fn assemble(verb: Verb, given: Given, operand: Option<PathBuf>, seen: &[&str]) -
             corpus: given.corpus.unwrap_or_else(default_corpus),
             only: given.only,
         })),
+        Verb::Grade => grade(given, operand),
+        Verb::Gallery => Ok(Command::Gallery(GalleryArgs {
+            corpus: operand.ok_or_else(|| UsageError("gallery expects the course's folder (with a2, a3, …)".into()))?,
+            html: given.html.expect("required"),
+            backend: given.backend.unwrap_or_default(),
+        })),
     }
+}
+
+/// `grade ASSIGNMENT`: the student's images from exactly one of `--images` and `--run`.
+fn grade(given: Given, operand: Option<PathBuf>) -> Result<Command, UsageError> {
+    let assignment =
+        operand.ok_or_else(|| UsageError("grade expects an assignment's folder (the one with commands.txt)".into()))?;
+    let judged = match (given.images, given.run) {
+        (Some(_), Some(_)) => return Err(UsageError("grade: give --images or --run, not both".into())),
+        (None, None) => {
+            return Err(UsageError(
+                "grade: give --images DIR (the student's images) or --run COMMAND (their program)".into(),
+            ))
+        }
+        (Some(_), None) if given.time_limit.is_some() => {
+            return Err(UsageError("grade: --time-limit applies to --run only".into()))
+        }
+        (Some(dir), None) => Judged::Images(dir),
+        (None, Some(command)) if command.trim().is_empty() => {
+            return Err(UsageError("grade: --run expects a command, got an empty one".into()))
+        }
+        (None, Some(command)) => Judged::Run { command, time_limit: given.time_limit.unwrap_or(DEFAULT_TIME_LIMIT) },
+    };
+    Ok(Command::Grade(GradeArgs {
+        assignment,
+        judged,
+        html: given.html,
+        // The f64 reference is the ground truth; a teacher may choose the GPU's speed.
+        backend: given.backend.unwrap_or(BackendChoice::Cpu),
+        thresholds: Thresholds {
+            max_flip_mean: given.max_flip_mean.unwrap_or(DEFAULT_MAX_FLIP_MEAN),
+            max_flip_p99: given.max_flip_p99.unwrap_or(DEFAULT_MAX_FLIP_P99),
+            max_diff_pixels: given.max_diff_pixels,
+        },
+    }))
 }
 
 /// A render must write something; `compare` compares the outputs listed with `--outputs`
@@ -657,6 +698,76 @@ mod tests {
             other => panic!("{other:?}"),
         }
         assert_eq!(parse("bench --runs 0").unwrap_err().0, "--runs: '0' is not a whole number ≥ 1");
+    }
+
+    /// `grade`: the reference renders by default, the thresholds are the documented ones,
+    /// and the student's images come from exactly one of `--images` and `--run`.
+    #[test]
+    fn grade_and_gallery_defaults_and_values() {
+        let thresholds = Thresholds {
+            max_flip_mean: DEFAULT_MAX_FLIP_MEAN,
+            max_flip_p99: DEFAULT_MAX_FLIP_P99,
+            max_diff_pixels: None,
+        };
+        match parse("grade a4 --images shots") {
+            Ok(Command::Grade(g)) => assert_eq!(
+                g,
+                GradeArgs {
+                    assignment: "a4".into(),
+                    judged: Judged::Images("shots".into()),
+                    html: None,
+                    backend: BackendChoice::Cpu,
+                    thresholds,
+                }
+            ),
+            other => panic!("{other:?}"),
+        }
+        let words =
+            ["grade", "a4", "--run", "python3 rt.py", "--time-limit", "2.5", "--max-flip-p99=0.5", "--html", "r.html"];
+        match parse_args(words) {
+            Ok(Command::Grade(g)) => {
+                assert_eq!(g.judged, Judged::Run { command: "python3 rt.py".into(), time_limit: 2.5 });
+                assert_eq!((g.thresholds.max_flip_p99, g.html), (0.5, Some("r.html".into())));
+            }
+            other => panic!("{other:?}"),
+        }
+        match parse("grade a4 --run ./rt") {
+            Ok(Command::Grade(g)) => {
+                assert_eq!(g.judged, Judged::Run { command: "./rt".into(), time_limit: DEFAULT_TIME_LIMIT })
+            }
+            other => panic!("{other:?}"),
+        }
+        match parse("gallery corpus --html g.html") {
+            Ok(Command::Gallery(g)) => {
+                assert_eq!((g.corpus, g.html, g.backend), ("corpus".into(), "g.html".into(), BackendChoice::Auto))
+            }
+            other => panic!("{other:?}"),
+        }
+        // Help states the defaults the code uses.
+        let usage = flags::usage();
+        for default in [DEFAULT_MAX_FLIP_MEAN, DEFAULT_MAX_FLIP_P99, DEFAULT_TIME_LIMIT] {
+            assert!(
+                usage.contains(&format!("(default {default})"))
+                    || usage.contains(&format!("(default\n{:25}{default})", "")),
+                "{default}"
+            );
+        }
+        let errors = [
+            ("grade a4", "grade: give --images DIR (the student's images) or --run COMMAND (their program)"),
+            ("grade a4 --images s --run r", "grade: give --images or --run, not both"),
+            ("grade a4 --images s --time-limit 3", "grade: --time-limit applies to --run only"),
+            ("grade a4 --run r --time-limit 0", "--time-limit: '0' is not a number > 0"),
+            ("grade --images s", "grade expects an assignment's folder (the one with commands.txt)"),
+            ("grade a4 a5 --images s", "grade: unexpected argument 'a5'"),
+            ("grade a4 --images s --max-flip-mean -1", "--max-flip-mean"),
+            ("grade a4 --images s --outputs color", "grade: unknown flag '--outputs'"),
+            ("gallery corpus", "-html FILE is required"),
+            ("gallery --html g.html", "gallery expects the course's folder (with a2, a3, …)"),
+        ];
+        for (line, message) in errors {
+            let err = parse(line).expect_err(line);
+            assert!(err.0.contains(message), "{line}: {err}");
+        }
     }
 
     #[test]

@@ -19,12 +19,15 @@ pub enum Verb {
     Batch = 2,
     Stitch = 3,
     Bench = 4,
-    Selftest = 5,
+    Grade = 5,
+    Gallery = 6,
+    Selftest = 7,
 }
 
 impl Verb {
     /// The verbs named by a first word, as typed.
-    const NAMED: [Verb; 5] = [Verb::Compare, Verb::Batch, Verb::Stitch, Verb::Bench, Verb::Selftest];
+    const NAMED: [Verb; 7] =
+        [Verb::Compare, Verb::Batch, Verb::Stitch, Verb::Bench, Verb::Grade, Verb::Gallery, Verb::Selftest];
 
     pub fn name(self) -> &'static str {
         match self {
@@ -33,6 +36,8 @@ impl Verb {
             Verb::Batch => "batch",
             Verb::Stitch => "stitch",
             Verb::Bench => "bench",
+            Verb::Grade => "grade",
+            Verb::Gallery => "gallery",
             Verb::Selftest => "selftest",
         }
     }
@@ -67,7 +72,7 @@ impl Verbs {
         Verbs(bits)
     }
 
-    const EVERY: Verbs = Verbs(0b11111);
+    const EVERY: Verbs = Verbs(0b1111_1111);
     const NONE: Verbs = Verbs(0);
 
     pub fn contains(self, verb: Verb) -> bool {
@@ -115,6 +120,18 @@ pub struct Given {
     pub seed: Option<u32>,
     /// `-render_samples FILE ZOOM` and `-render_filter FILE ZOOM`.
     pub pictures: Pictures,
+    /// `grade --images DIR`.
+    pub images: Option<PathBuf>,
+    /// `grade --run COMMAND`.
+    pub run: Option<String>,
+    /// `grade --time-limit S`.
+    pub time_limit: Option<f64>,
+    /// `grade --html FILE`, `gallery --html FILE`.
+    pub html: Option<PathBuf>,
+    /// `grade --max-flip-mean X`.
+    pub max_flip_mean: Option<f64>,
+    /// `grade --max-flip-p99 X`.
+    pub max_flip_p99: Option<f64>,
 }
 
 /// A flag that answers the command line by itself, whatever else it holds.
@@ -209,7 +226,7 @@ pub struct Flag {
     pub help: &'static str,
 }
 
-use Verb::{Batch, Bench, Compare, Render, Selftest, Stitch};
+use Verb::{Batch, Bench, Compare, Gallery, Grade, Render, Selftest, Stitch};
 
 /// The deepest `-bounces` (the reference recurses once per bounce).
 pub const MAX_BOUNCES: u64 = 1000;
@@ -345,12 +362,12 @@ pub static FLAGS: &[Flag] = &[
             names: || BackendChoice::ALL.map(BackendChoice::name).to_vec(),
             set: |g, k| g.backend = Some(BackendChoice::ALL[k]),
         },
-        Verbs::of(&[Render, Batch]),
+        Verbs::of(&[Render, Batch, Grade, Gallery]),
     )
     .refused(Compare, "compare always renders with both the GPU and the f64 reference")
     .help(
         "gpu, cpu (the f64 reference) or auto (default: the GPU if one is\n\
-         found, else the CPU with a notice)",
+         found, else the CPU with a notice; grade: cpu, the ground truth)",
     ),
     Flag::ours(
         "triangle_test",
@@ -432,9 +449,48 @@ pub static FLAGS: &[Flag] = &[
         "max_diff_pixels",
         "N",
         Takes::Number { what: "a number of pixels", min: 0, max: u64::MAX, set: |g, n| g.max_diff_pixels = Some(n) },
-        Verbs::of(&[Compare]),
+        Verbs::of(&[Compare, Grade]),
     )
-    .help("pixels an output may have more than 1 level off (default 0.1 %)"),
+    .help("pixels an output may have more than 1 level off (compare's\ndefault 0.1 %; grade's: no limit)"),
+    Flag::ours("images", "DIR", Takes::Path(|g, dir| g.images = Some(dir)), Verbs::of(&[Grade]))
+        .once()
+        .help("the student's images, named as commands.txt names them (.png\nfor .tga is accepted)"),
+    Flag::ours(
+        "run",
+        "COMMAND",
+        Takes::Text { what: "a command", set: |g, command| g.run = Some(command) },
+        Verbs::of(&[Grade]),
+    )
+    .once()
+    .help(
+        "the student's program (split at spaces), run on each line of\n\
+         commands.txt in a copy of the assignment's folder",
+    ),
+    Flag::ours(
+        "time_limit",
+        "S",
+        Takes::Positive { what: "a number of seconds", set: |g, s| g.time_limit = Some(s) },
+        Verbs::of(&[Grade]),
+    )
+    .help("seconds --run's program may take on one line (default 60)"),
+    Flag::ours(
+        "max_flip_mean",
+        "X",
+        Takes::Real { what: "a FLIP error", set: |g, x| g.max_flip_mean = Some(x) },
+        Verbs::of(&[Grade]),
+    )
+    .help("the mean FLIP error an image may have and pass (default 0.05)"),
+    Flag::ours(
+        "max_flip_p99",
+        "X",
+        Takes::Real { what: "a FLIP error", set: |g, x| g.max_flip_p99 = Some(x) },
+        Verbs::of(&[Grade]),
+    )
+    .help("the FLIP error 99 % of an image's pixels may not pass (default\n0.25)"),
+    Flag::ours("html", "FILE", Takes::Path(|g, path| g.html = Some(path)), Verbs::of(&[Grade, Gallery]))
+        .required(Verbs::of(&[Gallery]))
+        .once()
+        .help("an HTML page of the images, with FILE_files/ beside it for them"),
 ];
 
 /// The table's rows say only what differs from these defaults: optional, given any number
@@ -576,7 +632,7 @@ pub fn unexpected_argument(text: &str, first: bool) -> UsageError {
 
 /// What each command is for, in help, after its synopsis: the verb, what it takes besides
 /// flags, and a paragraph.
-const COMMANDS: [(Verb, &str, &str); 5] = [
+const COMMANDS: [(Verb, &str, &str); 7] = [
     (
         Stitch,
         "",
@@ -620,6 +676,23 @@ const COMMANDS: [(Verb, &str, &str); 5] = [
   more than 1 level off, or the GPU produced NaN or infinity. Takes the kernel flags and
   -shade_back; not --backend (it always runs both).",
     ),
+    (
+        Grade,
+        "ASSIGNMENT",
+        "Judges a student's images for the course's assignment folder ASSIGNMENT (its
+  commands.txt, scenes and meshes): every image its command lines write is rendered by us
+  and compared with the student's by NVIDIA's FLIP (0: no visible difference, 1: the
+  largest) and by the pixels more than 1 level off. Prints a line per image and exits 0 when
+  every image passes, 1 when any fails or is missing. The images come from --images DIR or
+  from --run COMMAND; a crash, a time-out or a missing file is that image's verdict.",
+    ),
+    (
+        Gallery,
+        "CORPUS",
+        "Renders every command line of the course's assignment folders under CORPUS (a2 … a7)
+  onto one HTML page, beside the course's own image from aN/expected/ where there is one,
+  with the FLIP map between them.",
+    ),
 ];
 
 const USAGE_HEAD: &str = "raycaster: render an MIT 6.837 scene file on the GPU (wgpu) or with the f64 CPU reference";
@@ -640,13 +713,18 @@ pub fn usage() -> String {
     text += &synopsis("Usage: raycaster", Render, "");
     text += "\n";
     FLAGS.iter().filter(|f| f.verbs.contains(Render)).for_each(|f| text += &f.help_lines());
+    // A flag of several commands is explained under the first of them only.
+    let mut explained: Vec<&str> = Vec::new();
     for (verb, operand, paragraph) in COMMANDS {
         text += "\n";
         text += &synopsis(&format!("raycaster {}", verb.name()), verb, operand);
         text += &format!("  {paragraph}\n");
-        FLAGS.iter().filter(|f| f.verbs.contains(verb) && !f.verbs.contains(Render)).for_each(|f| {
-            text += &f.help_lines();
-        });
+        for flag in FLAGS.iter().filter(|f| f.verbs.contains(verb) && !f.verbs.contains(Render)) {
+            if !explained.contains(&flag.name) {
+                explained.push(flag.name);
+                text += &flag.help_lines();
+            }
+        }
     }
     text + "\n" + USAGE_TAIL
 }
@@ -710,7 +788,7 @@ mod tests {
         assert!(text.contains("raycaster batch FILE [--backend gpu|cpu|auto] [--shard K/N]\n"), "{text}");
         let compare = text.split("raycaster compare").nth(1).unwrap().split("  Renders").next().unwrap();
         assert!(!compare.contains("--backend") && !compare.contains("--tile"), "{compare}");
-        for verb in [Render, Compare, Batch, Stitch, Bench, Selftest] {
+        for verb in [Render, Compare, Batch, Stitch, Bench, Grade, Gallery, Selftest] {
             let lines = synopsis("raycaster", verb, "");
             assert!(lines.lines().all(|l| l.chars().count() <= WIDTH), "{lines}");
         }

@@ -4,7 +4,8 @@
 //! 1. [`exit`]: how the command ends; [`signals`]: interrupts, ending through [`exit`];
 //! 2. [`window`]: `-gui`'s live view, over [`job`] and [`backend`];
 //!    [`job`]: one command line's render, `compare`'s, and batches; [`stitch`]: assembling
-//!    the parts of a split render; [`bench`]: `raycaster bench`;
+//!    the parts of a split render; [`bench`]: `raycaster bench`; [`grade`]: judging a
+//!    student's images, and the HTML pages; [`gallery`]: every assignment on a page;
 //! 3. [`cli`]: parsing; [`validate`]: the checks of a parsed command line that look at the
 //!    file system; [`output_file`]: the image files asked for and the sinks they are
 //!    streamed into; [`backend`]: the renderer;
@@ -19,6 +20,8 @@ pub mod bench;
 pub mod cli;
 pub mod exit;
 pub mod flags;
+pub mod gallery;
+pub mod grade;
 pub mod interrupt;
 pub mod job;
 pub mod memory;

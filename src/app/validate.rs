@@ -3,7 +3,7 @@
 //! one file. A failure is a bad command line like a parsing error: one line naming the
 //! flag, status 2, no file touched.
 
-use crate::app::args::{flag_of, Command, OutputPaths, UsageError};
+use crate::app::args::{flag_of, Command, Judged, OutputPaths, UsageError};
 use raycaster::image_io::ImageFormat;
 use std::path::{Path, PathBuf};
 
@@ -17,8 +17,46 @@ pub fn check(command: &Command) -> Result<(), UsageError> {
         // compare writes no file, so two outputs may name one.
         Command::Compare { args, .. } => image_names(&args.files),
         Command::Stitch(args) => image_names(&args.files),
+        Command::Grade(args) => {
+            has_commands(&args.assignment, "grade")?;
+            if let Judged::Images(dir) = &args.judged {
+                if !dir.is_dir() {
+                    return Err(UsageError(format!("--images {}: not a folder", dir.display())));
+                }
+            }
+            args.html.as_deref().map_or(Ok(()), html_name)
+        }
+        Command::Gallery(args) => {
+            if !args.corpus.is_dir() {
+                return Err(UsageError(format!("gallery {}: not a folder", args.corpus.display())));
+            }
+            html_name(&args.html)
+        }
         Command::Batch { .. } | Command::Bench(_) | Command::Selftest | Command::Help | Command::Version => Ok(()),
     }
+}
+
+/// An assignment's folder, with the `commands.txt` that says what to render.
+fn has_commands(folder: &Path, verb: &str) -> Result<(), UsageError> {
+    if !folder.join("commands.txt").is_file() {
+        return Err(UsageError(format!(
+            "{verb} {}: no commands.txt there; give an assignment's folder, such as ../shared/mit6837/a4",
+            folder.display()
+        )));
+    }
+    Ok(())
+}
+
+/// `--html FILE` names a file, not a folder.
+fn html_name(path: &Path) -> Result<(), UsageError> {
+    if names_a_folder(path) {
+        return Err(UsageError(format!(
+            "--html {}: names a folder; give a file name, such as {}",
+            path.display(),
+            path.join("report.html").display()
+        )));
+    }
+    Ok(())
 }
 
 /// Each output names an image file: not a folder, and with an extension that says which
