@@ -49,36 +49,6 @@ fn triangle_t_moller(tri: Triangle, ray: Ray, tmin: f32) -> f32 {
     return t_if_above(dot3(e2, q) * inv, tmin);
 }
 
-// Per-ray set-up of the watertight test: the axis permutation that makes the ray's largest
-// component z, and the shear that makes the ray +z.
-struct Shear {
-    axes: vec3<u32>,
-    s: vec3<f32>,
-}
-
-fn shear_for(d: vec3<f32>) -> Shear {
-    let a = abs(d);
-    var kz = 2u;
-    if (a.x > a.y && a.x > a.z) {
-        kz = 0u;
-    } else if (a.y > a.z) {
-        kz = 1u;
-    }
-    var kx = (kz + 1u) % 3u;
-    var ky = (kx + 1u) % 3u;
-    // Keep the winding: swap the other two axes when the ray points down its main axis.
-    if (d[kz] < 0.0) {
-        let k = kx;
-        kx = ky;
-        ky = k;
-    }
-    return Shear(vec3<u32>(kx, ky, kz), vec3<f32>(d[kx] / d[kz], d[ky] / d[kz], 1.0 / d[kz]));
-}
-
-fn permute(v: vec3<f32>, k: vec3<u32>) -> vec3<f32> {
-    return vec3<f32>(v[k.x], v[k.y], v[k.z]);
-}
-
 // Woop, Benthin, Wald, "Watertight Ray/Triangle Intersection", JCGT 2(1), 2013. Edge
 // functions are computed in a frame where the ray is the +z axis, so an edge shared by two
 // triangles gives both the same value with opposite signs: no ray slips between them.

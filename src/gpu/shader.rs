@@ -14,7 +14,8 @@ use std::sync::OnceLock;
 /// - `params.wgsl`: `override` switches, the structs shared with the host, the bindings;
 /// - `stats.wgsl`: the `-stats` counters, compiled in only where asked for;
 /// - `exact.wgsl`: products whose rounding no driver chooses, for the signs that decide hits;
-/// - `ray.wgsl`, `camera.wgsl`: the ray, its interval, primary rays;
+/// - `ray.wgsl`, `camera.wgsl`: the ray, its interval and its shear for the watertight
+///   triangle test (which every search sets up once per ray), primary rays;
 /// - `sphere.wgsl`, `ellipsoid.wgsl`, `plane.wgsl`, `triangle.wgsl`: ray/primitive tests,
 ///   each returning the nearest t or `NO_HIT`;
 /// - `closest.wgsl`: the `Closest` record, a reference's test, flat loops;
