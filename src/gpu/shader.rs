@@ -28,9 +28,10 @@ use std::sync::OnceLock;
 ///   and where rays leaving it start, solid textures (Perlin's improved noise), its directly
 ///   lit colour, the reflected and refracted rays' colours, the words it leaves in the
 ///   output;
-/// - `entry.wgsl`: `main` and `main_bins`;
 /// - `sampling.wgsl`, `filter.wgsl`: with sampling (docs/SPEC.md §8), the samples' positions
-///   and `main_samples` (`main_samples_bins` with bins), then the filters and `main_filter`.
+///   and rays and the words they leave, then the filters;
+/// - `entry.wgsl`: every entry point, `main`, `main_bins`, `main_bins_shared`,
+///   `main_samples`, `main_samples_bins` and `main_filter`.
 ///
 /// Plain concatenation, not a composer such as naga_oil: nothing is resolved at run time,
 /// no dependency is added, and naga sees one module as it did when the kernel was one file
@@ -56,9 +57,9 @@ pub const FILES: [(&str, &str); 23] = [
     ("shading.wgsl", include_str!("../../shaders/shading.wgsl")),
     ("tree.wgsl", include_str!("../../shaders/tree.wgsl")),
     ("output.wgsl", include_str!("../../shaders/output.wgsl")),
-    ("entry.wgsl", include_str!("../../shaders/entry.wgsl")),
     ("sampling.wgsl", include_str!("../../shaders/sampling.wgsl")),
     ("filter.wgsl", include_str!("../../shaders/filter.wgsl")),
+    ("entry.wgsl", include_str!("../../shaders/entry.wgsl")),
 ];
 
 /// The constants the host owns, as WGSL `const`s: sizes that must agree with how the host
