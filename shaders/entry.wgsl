@@ -1,3 +1,4 @@
+// uses: host, params, stats, ray, camera, closest, bins, nearest, shading, tree, voxels, output, sampling, filter
 // The entry points. `main` renders one pixel per invocation; `main_bins` a packet of
 // PACKET pixels stacked in a column, so that every primitive loaded from a bin is tested
 // against PACKET rays; `main_bins_shared` the same, its subgroup's lanes sharing the
@@ -21,32 +22,6 @@ fn loops_were_cut() -> bool {
         passes += 1u;
     }
     return passes != P.loop_canary_trips;
-}
-
-// What a pixel shows, shaded and not yet written; `beyond_reach` where a solid texture
-// was blended beyond its reach on the way (shaders/texture.wgsl).
-struct Shaded {
-    hit: bool,
-    color: vec3<f32>,
-    normal: vec3<f32>,
-    t: f32,
-    beyond_reach: bool,
-}
-
-fn shade_pixel(ray: Ray, hit: Closest) -> Shaded {
-    if (hit.t == NO_HIT) {
-        return Shaded(false, P.background, vec3<f32>(0.0), 0.0, false);
-    }
-    let surface = surface_at(hit, ray);
-    var color = vec3<f32>(0.0);
-    if (TEXTURES) {
-        beyond_texture_reach = false;
-        shading_secondary_ray = false;
-    }
-    if (WANT_COLOR) {
-        color = color_of_tree(surface, ray);
-    }
-    return Shaded(true, color, surface.normal, hit.t, TEXTURES && beyond_texture_reach);
 }
 
 // Writes tile-local row `row` of column i, when it belongs to this tile; handed over to the
@@ -87,12 +62,6 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     if (!cut) {
         flush_counts(stats_slot(id));
     }
-}
-
-// Which slot of `counters` an invocation adds into: neighbours in a workgroup take
-// different ones.
-fn stats_slot(id: vec3<u32>) -> u32 {
-    return id.x + WORKGROUP * id.y;
 }
 
 // Row r of a packet starting at image row `base` (tile-relative `first`): its ray and its

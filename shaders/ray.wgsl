@@ -1,3 +1,4 @@
+// uses: params
 // A ray, the interval of t it accepts, and its per-ray set-up for the watertight triangle
 // test (shaders/triangle.wgsl), which each search computes once per ray and hands to every
 // triangle it tests.

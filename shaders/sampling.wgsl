@@ -1,3 +1,4 @@
+// uses: host, params, stats, exact, ray, camera, closest, bins, tree
 // Supersampling (docs/SPEC.md §8): where a pixel's samples lie, the same positions as
 // raycaster::sampling on the host, their rays, and the words a traced sample leaves in
 // `samples`. Reached only from `main_samples`, `main_samples_bins` and `main_filter`

@@ -1,5 +1,7 @@
+// uses: params, exact, ray
 // Ray/triangle, three ways, so that the course's comparison of methods is a measurement
-// (--triangle-test; README "Accuracy"). Edges count as inside; both sides hit.
+// (--triangle-test; README "Accuracy"), and the watertight one's primary-ray form, for the
+// screen-space bins (shaders/bins.wgsl). Edges count as inside; both sides hit.
 
 fn triangle_t(tri: Triangle, ray: Ray, shear: Shear, tmin: f32) -> f32 {
     if (TRIANGLE_TEST == TRIANGLE_CRAMER) {
@@ -79,6 +81,31 @@ fn triangle_t_watertight(tri: Triangle, ray: Ray, shear: Shear, tmin: f32) -> f3
     }
     let scaled = (rounded(u * a.z) + rounded(v * b.z)) + rounded(w * c.z);
     return t_if_above(rounded(scaled * shear.s.z) / det, tmin);
+}
+
+// The edge functions of a primary ray against a triangle's edge planes: all of one sign
+// (or zero) when the ray's line meets the triangle, edges included. Watertight (see
+// gpu::binning::EyeTriangle): a shared edge's plane is negated bit for bit in its two
+// triangles, and each product is rounded on its own (shaders/exact.wgsl), so that the
+// negation holds on every driver. Then t from the triangle's plane; a ray in that plane
+// never hits. The non-short-circuit & and | keep it free of branches.
+fn eye_triangle_t(tri: EyeTriangle, ray: Ray, tmin: f32) -> f32 {
+    var q = ray.direction;
+    if (ORTHOGRAPHIC) {
+        q = ray.origin;
+    }
+    let e0 = dot3(tri.rows[0].xyz, q) - tri.rows[0].w;
+    let e1 = dot3(tri.rows[1].xyz, q) - tri.rows[1].w;
+    let e2 = dot3(tri.rows[2].xyz, q) - tri.rows[2].w;
+    let inside = ((e0 >= 0.0) & (e1 >= 0.0) & (e2 >= 0.0)) | ((e0 <= 0.0) & (e1 <= 0.0) & (e2 <= 0.0));
+    let plane = tri.rows[3];
+    let denominator = dot3(plane.xyz, ray.direction);
+    var numerator = plane.w;
+    if (ORTHOGRAPHIC) {
+        numerator -= dot3(plane.xyz, ray.origin);
+    }
+    let t = numerator / select(1.0, denominator, denominator != 0.0);
+    return select(NO_HIT, t_if_above(t, tmin), inside & (denominator != 0.0));
 }
 
 // The host computed the normal from the f64 vertices: a cross product of the f32 ones would
