@@ -1,45 +1,6 @@
+// uses: host, params, stats, ray, triangle, closest
 // Screen-space bins (gpu::binning): the BIN_COLUMNS × BIN_ROWS pixels of a bin walk one list
 // of candidates, nearest first, the same for every invocation, in packets of PACKET rays.
-
-// The edge functions of a primary ray against a triangle's edge planes: all of one sign
-// (or zero) when the ray's line meets the triangle, edges included. Watertight (see
-// gpu::binning::EyeTriangle): a shared edge's plane is negated bit for bit in its two
-// triangles, and each product is rounded on its own (shaders/exact.wgsl), so that the
-// negation holds on every driver. Then t from the triangle's plane; a ray in that plane
-// never hits. The non-short-circuit & and | keep it free of branches.
-fn eye_triangle_t(tri: EyeTriangle, ray: Ray, tmin: f32) -> f32 {
-    var q = ray.direction;
-    if (ORTHOGRAPHIC) {
-        q = ray.origin;
-    }
-    let e0 = dot3(tri.rows[0].xyz, q) - tri.rows[0].w;
-    let e1 = dot3(tri.rows[1].xyz, q) - tri.rows[1].w;
-    let e2 = dot3(tri.rows[2].xyz, q) - tri.rows[2].w;
-    let inside = ((e0 >= 0.0) & (e1 >= 0.0) & (e2 >= 0.0)) | ((e0 <= 0.0) & (e1 <= 0.0) & (e2 <= 0.0));
-    let plane = tri.rows[3];
-    let denominator = dot3(plane.xyz, ray.direction);
-    var numerator = plane.w;
-    if (ORTHOGRAPHIC) {
-        numerator -= dot3(plane.xyz, ray.origin);
-    }
-    let t = numerator / select(1.0, denominator, denominator != 0.0);
-    return select(NO_HIT, t_if_above(t, tmin), inside & (denominator != 0.0));
-}
-
-fn try_eye_triangle(k: u32, ray: Ray, tmin: f32, best: Closest) -> Closest {
-    count(COUNT_TESTS);
-    let t = eye_triangle_t(eye_triangles[k], ray, tmin);
-    return nearer(best, t, KIND_TRIANGLE, k);
-}
-
-// With bins, the watertight test takes its primary-ray form (the same guarantee, from
-// planes computed once per frame); the other tests stay as they are, to be compared.
-fn try_binned_triangle(k: u32, ray: Ray, shear: Shear, tmin: f32, best: Closest) -> Closest {
-    if (TRIANGLE_TEST == TRIANGLE_WATERTIGHT) {
-        return try_eye_triangle(k, ray, tmin, best);
-    }
-    return try_triangle(k, ray, shear, tmin, best);
-}
 
 // The bin of pixel column i in image row `row` (from the top), in the band of bin rows
 // bound for this dispatch (gpu::binning::Bins::band).

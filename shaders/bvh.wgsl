@@ -1,3 +1,4 @@
+// uses: host, params, ray, closest
 // The bounding volume hierarchy (src/bvh.rs): a box test and two walks, nearest hit and
 // any hit.
 

@@ -1,3 +1,4 @@
+// uses: params, exact, ray
 // Primary rays: the camera maths of docs/SPEC.md §3, as camera::PrimaryRays on the host.
 
 // Pixel (i from the left, j from the bottom), sampled at its centre; the longer image side

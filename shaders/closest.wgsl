@@ -1,3 +1,4 @@
+// uses: host, params, stats, ray, sphere, ellipsoid, plane, triangle
 // The closest hit: the nearest t and what was hit, nothing more (the surface is built once,
 // for the nearest hit only, by surface_at; pbrt-v4 splits intersection the same way).
 
@@ -40,6 +41,21 @@ fn try_triangle(k: u32, ray: Ray, shear: Shear, tmin: f32, best: Closest) -> Clo
     return nearer(best, t, KIND_TRIANGLE, k);
 }
 
+fn try_eye_triangle(k: u32, ray: Ray, tmin: f32, best: Closest) -> Closest {
+    count(COUNT_TESTS);
+    let t = eye_triangle_t(eye_triangles[k], ray, tmin);
+    return nearer(best, t, KIND_TRIANGLE, k);
+}
+
+// With bins, the watertight test takes its primary-ray form (the same guarantee, from
+// planes computed once per frame); the other tests stay as they are, to be compared.
+fn try_binned_triangle(k: u32, ray: Ray, shear: Shear, tmin: f32, best: Closest) -> Closest {
+    if (TRIANGLE_TEST == TRIANGLE_WATERTIGHT) {
+        return try_eye_triangle(k, ray, tmin, best);
+    }
+    return try_triangle(k, ray, shear, tmin, best);
+}
+
 // Tests the primitive a reference names (kind << REF_KIND_SHIFT | index; with triangles
 // alone, the triangle index itself, since KIND_TRIANGLE is 0). `binned` selects the
 // triangle test of a bin (try_binned_triangle) over the hierarchy's; every caller passes a
@@ -72,37 +88,6 @@ fn closest_plane(ray: Ray, tmin: f32) -> Closest {
         for (var k = 0u; k < P.num_planes; k++) {
             count(COUNT_TESTS);
             best = nearer(best, plane_t(planes[k], ray, tmin), KIND_PLANE, k);
-        }
-    }
-    return best;
-}
-
-// The closest hit above tmin without bins: through the hierarchy, or flat loops over each
-// kind.
-fn closest_hit(ray: Ray, tmin: f32) -> Closest {
-    count(COUNT_RAYS);
-    var best = closest_plane(ray, tmin);
-    // Only the watertight test reads the shear; otherwise the compiler drops it.
-    let shear = shear_for(ray.direction);
-    if (USE_GRID) {
-        return grid_closest(ray, shear, tmin, best);
-    }
-    if (USE_BVH) {
-        return traverse(ray, shear, tmin, best);
-    }
-    if (HAS_SPHERES) {
-        for (var k = 0u; k < P.num_spheres; k++) {
-            best = try_sphere(k, ray, tmin, best);
-        }
-    }
-    if (HAS_ELLIPSOIDS) {
-        for (var k = 0u; k < P.num_ellipsoids; k++) {
-            best = try_ellipsoid(k, ray, tmin, best);
-        }
-    }
-    if (HAS_TRIANGLES) {
-        for (var k = 0u; k < P.num_triangles; k++) {
-            best = try_triangle(k, ray, shear, tmin, best);
         }
     }
     return best;

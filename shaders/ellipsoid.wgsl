@@ -1,3 +1,4 @@
+// uses: params, exact, ray, sphere
 // A sphere under a transform that is not a similarity: the ray goes into the unit sphere's
 // space by the affine map W the host inverted in f64 (docs/SPEC.md §4).
 

@@ -1,11 +1,16 @@
+// uses: host, params, stats, ray, camera, closest, bins, nearest, shading, tree, voxels, output, sampling, filter
 // The entry points. `main` renders one pixel per invocation; `main_bins` a packet of
 // PACKET pixels stacked in a column, so that every primitive loaded from a bin is tested
 // against PACKET rays; `main_bins_shared` the same, its subgroup's lanes sharing the
-// loads. Without bins an invocation stays at one pixel: lavapipe stops an invocation's
-// loops after 65535 iterations in all (docs/lavapipe.md), which PACKET flat walks over many
-// primitives would reach. Separate entry points, not an override: wgpu compiles only what
-// the chosen one reaches, and lavapipe would otherwise compile the others' code before
-// dropping it. (The host's gpu::KernelConfig::packet and entry_point.)
+// loads; with sampling (docs/SPEC.md §8), `main_samples` one sample per invocation
+// (`main_samples_bins` a packet of them, with bins) and `main_filter` one output pixel from
+// the samples. All in this file, so that what a dispatch runs is found from its name
+// (gpu::KernelConfig::entry_point). Without bins an invocation stays at one pixel: lavapipe
+// stops an invocation's loops after 65535 iterations in all (docs/lavapipe.md), which
+// PACKET flat walks over many primitives would reach. Separate entry points, not an
+// override: wgpu compiles only what the chosen one reaches, and lavapipe would otherwise
+// compile the others' code before dropping it. (The host's gpu::KernelConfig::packet and
+// entry_point.)
 
 // Whether the driver's loop limit was reached (docs/lavapipe.md): lavapipe counts the
 // iterations of all of an invocation's loops together and, past its limit, lets each loop
@@ -17,32 +22,6 @@ fn loops_were_cut() -> bool {
         passes += 1u;
     }
     return passes != P.loop_canary_trips;
-}
-
-// What a pixel shows, shaded and not yet written; `beyond_reach` where a solid texture
-// was blended beyond its reach on the way (shaders/texture.wgsl).
-struct Shaded {
-    hit: bool,
-    color: vec3<f32>,
-    normal: vec3<f32>,
-    t: f32,
-    beyond_reach: bool,
-}
-
-fn shade_pixel(ray: Ray, hit: Closest) -> Shaded {
-    if (hit.t == NO_HIT) {
-        return Shaded(false, P.background, vec3<f32>(0.0), 0.0, false);
-    }
-    let surface = surface_at(hit, ray);
-    var color = vec3<f32>(0.0);
-    if (TEXTURES) {
-        beyond_texture_reach = false;
-        shading_secondary_ray = false;
-    }
-    if (WANT_COLOR) {
-        color = color_of_tree(surface, ray);
-    }
-    return Shaded(true, color, surface.normal, hit.t, TEXTURES && beyond_texture_reach);
 }
 
 // Writes tile-local row `row` of column i, when it belongs to this tile; handed over to the
@@ -83,12 +62,6 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     if (!cut) {
         flush_counts(stats_slot(id));
     }
-}
-
-// Which slot of `counters` an invocation adds into: neighbours in a workgroup take
-// different ones.
-fn stats_slot(id: vec3<u32>) -> u32 {
-    return id.x + WORKGROUP * id.y;
 }
 
 // Row r of a packet starting at image row `base` (tile-relative `first`): its ray and its
@@ -183,4 +156,127 @@ fn main_bins_shared(
     // The host chose this kernel for subgroups of BIN_COLUMNS lanes; should the driver
     // run others, the lanes did not walk one bin together: the reference renders the pixels.
     finish_packet(i, first, stats_slot(vec3<u32>(i, packet_row, 0u)), lanes != BIN_COLUMNS);
+}
+
+// One sample per invocation: x the column, y the row of samples, z the sample's index.
+// Neighbouring invocations trace the same sample of neighbouring pixels, rays a pixel apart.
+@compute @workgroup_size(WORKGROUP, WORKGROUP)
+fn main_samples(@builtin(global_invocation_id) id: vec3<u32>) {
+    P = params;
+    let i = id.x;
+    let r = id.y;
+    let k = id.z;
+    if (i >= P.width || r >= sampling.rows || k >= sampling.count) {
+        return;
+    }
+    let j = P.height - 1u - (sampling.first_row + r);
+    let ray = sample_ray(i, j, k);
+    load_shading_data();
+    // -visualize_grid's picture (grid.wgsl's voxels), sample by sample, as `main` draws it.
+    var shaded: Shaded;
+    if (VOXELS) {
+        shaded = voxel_pixel(ray);
+    } else {
+        shaded = shade_pixel(ray, closest_hit(ray, t_min()));
+    }
+    let cut = LOOP_CANARY && loops_were_cut();
+    write_sample(i, r, k, shaded, cut);
+    flush_sample_counts(id, r, cut);
+}
+
+// With bins: a packet of PACKET samples per invocation, which walk one bin together. A bin
+// lists what any ray through its pixels can meet, anywhere in them
+// (gpu::binning::Bins::build, its `reach`). With PACKET samples or more a pixel, a packet holds samples
+// PACKET·z … of one pixel (one past the last repeats it, traced but not written); with
+// fewer (1 or 2), every sample of PACKET / count rows of one column, as `main_bins` stacks
+// rows, the rows starting at a multiple of that count so that a packet never straddles two
+// bins (BIN_ROWS rows, a multiple of PACKET).
+@compute @workgroup_size(WORKGROUP, WORKGROUP)
+fn main_samples_bins(@builtin(global_invocation_id) id: vec3<u32>) {
+    P = params;
+    let i = id.x;
+    let per_row = min(sampling.count, PACKET);
+    let rows = packet_rows();
+    let base = sampling.first_row - sampling.first_row % rows + id.y * rows;
+    let first = id.z * PACKET;
+    if (i >= P.width || base >= sampling.first_row + sampling.rows || first >= sampling.count) {
+        return;
+    }
+    let tmin = t_min();
+    // Each slot written out, as in main_bins (no loop indexes the packet's arrays).
+    let at0 = start_sample(0u, i, base, first, per_row, rows, tmin);
+    let at1 = start_sample(1u, i, base, first, per_row, rows, tmin);
+    let at2 = start_sample(2u, i, base, first, per_row, rows, tmin);
+    let at3 = start_sample(3u, i, base, first, per_row, rows, tmin);
+    walk_bin_packet(i, base, base + rows - 1u, tmin);
+    load_shading_data();
+    let s0 = shade_pixel(packet_rays[0], packet_hits[0]);
+    let s1 = shade_pixel(packet_rays[1], packet_hits[1]);
+    let s2 = shade_pixel(packet_rays[2], packet_hits[2]);
+    let s3 = shade_pixel(packet_rays[3], packet_hits[3]);
+    // One canary after all of the invocation's loops, as in main_bins.
+    let cut = LOOP_CANARY && loops_were_cut();
+    finish_sample(i, at0, s0, cut);
+    finish_sample(i, at1, s1, cut);
+    finish_sample(i, at2, s2, cut);
+    finish_sample(i, at3, s3, cut);
+    // The packet's rows that are the tile's (not the filter's overlap) count its tests.
+    if (!cut && base < P.first_row + P.tile_rows && base + rows > P.first_row) {
+        flush_counts(stats_slot(id));
+    }
+}
+
+// One output pixel per invocation, tile-local row y.
+@compute @workgroup_size(WORKGROUP, WORKGROUP)
+fn main_filter(@builtin(global_invocation_id) id: vec3<u32>) {
+    P = params;
+    let i = id.x;
+    let row = id.y;
+    if (i >= P.width || row >= P.tile_rows) {
+        return;
+    }
+    let image_row = i32(P.first_row + row);
+    let radius = i32(sampling.radius);
+    let n = sampling.count;
+    var sum = FilterSum(0.0, vec3<f32>(0.0), 0.0, vec3<f32>(0.0), 0.0, 0u);
+    for (var dr = -radius; dr <= radius; dr++) {
+        let row2 = image_row + dr;
+        if (row2 < 0 || row2 >= i32(P.height)) {
+            continue;
+        }
+        let j2 = P.height - 1u - u32(row2);
+        for (var di = -radius; di <= radius; di++) {
+            let i2 = i32(i) + di;
+            if (i2 < 0 || i2 >= i32(P.width)) {
+                continue;
+            }
+            let first = ((u32(row2) - sampling.first_row) * P.width + u32(i2)) * n;
+            for (var k = 0u; k < n; k++) {
+                // Rows run down the image; a sample's y runs up.
+                let p = sample_position(u32(i2), j2, k);
+                let w = filter_weight(f32(di) + p.x - 0.5, f32(-dr) + p.y - 0.5);
+                add_sample(&sum, w, first + k);
+            }
+        }
+    }
+    if (sum.weight == 0.0) {
+        // No sample weighs: the plain average of the pixel's own.
+        sum = FilterSum(0.0, vec3<f32>(0.0), 0.0, vec3<f32>(0.0), 0.0, sum.handover);
+        let first = ((u32(image_row) - sampling.first_row) * P.width + i) * n;
+        for (var k = 0u; k < n; k++) {
+            add_sample(&sum, 1.0, first + k);
+        }
+    }
+    let hit = sum.hit_weight > 0.0 && 2.0 * sum.hit_weight >= sum.weight;
+    let per_hit = select(0.0, 1.0 / sum.hit_weight, sum.hit_weight > 0.0);
+    let normal = select(vec3<f32>(0.0), sum.normal * per_hit, hit);
+    let t = select(0.0, sum.depth * per_hit, hit);
+    // A sample the kernel could not finish makes the pixel the reference's.
+    var handover = HANDOVER_NONE;
+    if ((sum.handover & 2u) != 0u || (LOOP_CANARY && loops_were_cut())) {
+        handover = HANDOVER_LOOPS;
+    } else if ((sum.handover & 4u) != 0u) {
+        handover = HANDOVER_REACH;
+    }
+    write_pixel(row * P.width + i, hit, sum.color / sum.weight, normal, t, handover);
 }

@@ -1,3 +1,4 @@
+// uses: params
 // Arithmetic whose rounding no driver chooses (docs/SPEC.md §6, "What the kernel assumes of
 // the driver"). WGSL lets a compiler fuse a multiply into the add or subtraction that uses
 // it (one rounding instead of two) and compute dot and cross in any fused order; NVIDIA's

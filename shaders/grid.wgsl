@@ -1,3 +1,4 @@
+// uses: host, params, stats, exact, ray, closest
 // The -grid (USE_GRID; docs/SPEC.md §7): finite primitives listed per cell of a uniform
 // grid (gpu::flatten::GpuGrid), walked in order along the ray by the 3D-DDA of Amanatides
 // and Woo (1987). Cell (x, y, z)'s list is prim_refs[first .. first + count] for

@@ -1,3 +1,4 @@
+// uses: host, params, stats, ray, plane, closest, bvh, grid
 // The any-hit query, for shadow rays: whether anything lies between a point and a light.
 // A kernel without SHADOWS never calls it, so its pipeline does not compile it.
 

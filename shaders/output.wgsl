@@ -1,3 +1,4 @@
+// uses: host, params
 // The words a pixel leaves in `pixels` (gpu::layout::PixelLayout decodes them).
 
 // floor(255·clamp(v, 0, 1)) per channel, as image_io::quantize (NaN → 0; docs/SPEC.md §5),

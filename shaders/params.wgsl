@@ -1,3 +1,4 @@
+// uses: sampling
 // What the host and the kernel share: the `override` switches a pipeline is compiled with,
 // the structs the host uploads (each mirrored by a #[repr(C)] twin in gpu::layout, which
 // tests/layout.rs holds to the same size and offsets) and the bindings (gpu::BINDINGS).

@@ -1,3 +1,4 @@
+// uses: params, exact, ray
 // Ray/plane. Planes are infinite: they stay outside the bins and the hierarchy and are
 // tested by every ray.
 

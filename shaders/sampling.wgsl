@@ -1,7 +1,8 @@
+// uses: host, params, stats, exact, ray, camera, closest, bins, tree
 // Supersampling (docs/SPEC.md §8): where a pixel's samples lie, the same positions as
-// raycaster::sampling on the host, and the entry point that traces one sample per
-// invocation (or a packet of them, with bins). Reached only from `main_samples`,
-// `main_samples_bins` and `main_filter`: a render without sampling compiles none of it.
+// raycaster::sampling on the host, their rays, and the words a traced sample leaves in
+// `samples`. Reached only from `main_samples`, `main_samples_bins` and `main_filter`
+// (shaders/entry.wgsl): a render without sampling compiles none of it.
 
 // gpu::layout::GpuSampling: the sampler, the filter and the rows of samples a tile holds.
 struct Sampling {
@@ -79,74 +80,6 @@ fn sample_ray(i: u32, j: u32, k: u32) -> Ray {
     let ny = i32(2u * j * m + 2u * (k / m) + 1u) - i32(P.height * m);
     let scale = f32(2u * m * max(P.width, P.height));
     return ray_through(f32(nx) / scale, f32(ny) / scale);
-}
-
-// One sample per invocation: x the column, y the row of samples, z the sample's index.
-// Neighbouring invocations trace the same sample of neighbouring pixels, rays a pixel apart.
-@compute @workgroup_size(WORKGROUP, WORKGROUP)
-fn main_samples(@builtin(global_invocation_id) id: vec3<u32>) {
-    P = params;
-    let i = id.x;
-    let r = id.y;
-    let k = id.z;
-    if (i >= P.width || r >= sampling.rows || k >= sampling.count) {
-        return;
-    }
-    let j = P.height - 1u - (sampling.first_row + r);
-    let ray = sample_ray(i, j, k);
-    load_shading_data();
-    // -visualize_grid's picture (grid.wgsl's voxels), sample by sample, as `main` draws it.
-    var shaded: Shaded;
-    if (VOXELS) {
-        shaded = voxel_pixel(ray);
-    } else {
-        shaded = shade_pixel(ray, closest_hit(ray, t_min()));
-    }
-    let cut = LOOP_CANARY && loops_were_cut();
-    write_sample(i, r, k, shaded, cut);
-    flush_sample_counts(id, r, cut);
-}
-
-// With bins: a packet of PACKET samples per invocation, which walk one bin together. A bin
-// lists what any ray through its pixels can meet, anywhere in them
-// (gpu::binning::Bins::build, its `reach`). With PACKET samples or more a pixel, a packet holds samples
-// PACKET·z … of one pixel (one past the last repeats it, traced but not written); with
-// fewer (1 or 2), every sample of PACKET / count rows of one column, as `main_bins` stacks
-// rows, the rows starting at a multiple of that count so that a packet never straddles two
-// bins (BIN_ROWS rows, a multiple of PACKET).
-@compute @workgroup_size(WORKGROUP, WORKGROUP)
-fn main_samples_bins(@builtin(global_invocation_id) id: vec3<u32>) {
-    P = params;
-    let i = id.x;
-    let per_row = min(sampling.count, PACKET);
-    let rows = packet_rows();
-    let base = sampling.first_row - sampling.first_row % rows + id.y * rows;
-    let first = id.z * PACKET;
-    if (i >= P.width || base >= sampling.first_row + sampling.rows || first >= sampling.count) {
-        return;
-    }
-    let tmin = t_min();
-    // Each slot written out, as in main_bins (no loop indexes the packet's arrays).
-    let at0 = start_sample(0u, i, base, first, per_row, rows, tmin);
-    let at1 = start_sample(1u, i, base, first, per_row, rows, tmin);
-    let at2 = start_sample(2u, i, base, first, per_row, rows, tmin);
-    let at3 = start_sample(3u, i, base, first, per_row, rows, tmin);
-    walk_bin_packet(i, base, base + rows - 1u, tmin);
-    load_shading_data();
-    let s0 = shade_pixel(packet_rays[0], packet_hits[0]);
-    let s1 = shade_pixel(packet_rays[1], packet_hits[1]);
-    let s2 = shade_pixel(packet_rays[2], packet_hits[2]);
-    let s3 = shade_pixel(packet_rays[3], packet_hits[3]);
-    // One canary after all of the invocation's loops, as in main_bins.
-    let cut = LOOP_CANARY && loops_were_cut();
-    finish_sample(i, at0, s0, cut);
-    finish_sample(i, at1, s1, cut);
-    finish_sample(i, at2, s2, cut);
-    finish_sample(i, at3, s3, cut);
-    // The packet's rows that are the tile's (not the filter's overlap) count its tests.
-    if (!cut && base < P.first_row + P.tile_rows && base + rows > P.first_row) {
-        flush_counts(stats_slot(id));
-    }
 }
 
 // Slot q of a packet of `main_samples_bins` (see there): its ray and nearest plane; returns

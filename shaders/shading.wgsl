@@ -1,3 +1,4 @@
+// uses: host, params, exact, ray, occluded, surface, texture
 // Colour at a surface, lit directly (docs/SPEC.md §5): ambient, then per light Lambert's
 // cosine law and the Blinn–Torrance specular lobe, each light first asked, with -shadows,
 // whether anything blocks it.

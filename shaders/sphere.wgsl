@@ -1,3 +1,4 @@
+// uses: params, exact
 // Ray/sphere: the nearest root t > tmin of |f + t·d| = r, where f = origin − centre and d
 // need not be unit length (an ellipsoid hands over its object-space ray).
 

@@ -1,3 +1,4 @@
+// uses: host, params
 // The course's statistics (-stats; docs/SPEC.md §7), counted only where STATS: with it
 // false every call of count folds away and no counter is touched, so a render without
 // -stats runs the kernel it ran before. An invocation counts in private registers and adds
@@ -53,4 +54,10 @@ fn flush_counts(key: u32) {
     for (var k = 0u; k < 4u; k++) {
         add_count(base + 2u * k, counted[k]);
     }
+}
+
+// Which slot of `counters` an invocation adds into: neighbours in a workgroup take
+// different ones.
+fn stats_slot(id: vec3<u32>) -> u32 {
+    return id.x + WORKGROUP * id.y;
 }

@@ -1,3 +1,4 @@
+// uses: host, params, exact, ray, ellipsoid, triangle, closest
 // The surface at the nearest hit, built once per ray after the search (pbrt-v4's split of
 // intersection and surface interaction): the search compares t alone.
 

@@ -1,3 +1,4 @@
+// uses: host, params, exact, ray, closest, nearest, surface, texture, shading
 // The ray tree of docs/SPEC.md §5 without recursion, which WGSL does not have: the rays
 // still to trace wait on an explicit stack, depth first. A node pushes its children
 // (reflected and refracted, for each material a solid texture blends) one level deeper and
@@ -130,4 +131,30 @@ fn color_of_tree(surface: Surface, ray: Ray) -> vec3<f32> {
         push_children(next, node);
     }
     return color;
+}
+
+// What a pixel shows, shaded and not yet written; `beyond_reach` where a solid texture
+// was blended beyond its reach on the way (shaders/texture.wgsl).
+struct Shaded {
+    hit: bool,
+    color: vec3<f32>,
+    normal: vec3<f32>,
+    t: f32,
+    beyond_reach: bool,
+}
+
+fn shade_pixel(ray: Ray, hit: Closest) -> Shaded {
+    if (hit.t == NO_HIT) {
+        return Shaded(false, P.background, vec3<f32>(0.0), 0.0, false);
+    }
+    let surface = surface_at(hit, ray);
+    var color = vec3<f32>(0.0);
+    if (TEXTURES) {
+        beyond_texture_reach = false;
+        shading_secondary_ray = false;
+    }
+    if (WANT_COLOR) {
+        color = color_of_tree(surface, ray);
+    }
+    return Shaded(true, color, surface.normal, hit.t, TEXTURES && beyond_texture_reach);
 }

@@ -1,5 +1,7 @@
+// uses: params, exact, ray
 // Ray/triangle, three ways, so that the course's comparison of methods is a measurement
-// (--triangle-test; README "Accuracy"). Edges count as inside; both sides hit.
+// (--triangle-test; README "Accuracy"), and the watertight one's primary-ray form, for the
+// screen-space bins (shaders/bins.wgsl). Edges count as inside; both sides hit.
 
 fn triangle_t(tri: Triangle, ray: Ray, shear: Shear, tmin: f32) -> f32 {
     if (TRIANGLE_TEST == TRIANGLE_CRAMER) {
@@ -49,36 +51,6 @@ fn triangle_t_moller(tri: Triangle, ray: Ray, tmin: f32) -> f32 {
     return t_if_above(dot3(e2, q) * inv, tmin);
 }
 
-// Per-ray set-up of the watertight test: the axis permutation that makes the ray's largest
-// component z, and the shear that makes the ray +z.
-struct Shear {
-    axes: vec3<u32>,
-    s: vec3<f32>,
-}
-
-fn shear_for(d: vec3<f32>) -> Shear {
-    let a = abs(d);
-    var kz = 2u;
-    if (a.x > a.y && a.x > a.z) {
-        kz = 0u;
-    } else if (a.y > a.z) {
-        kz = 1u;
-    }
-    var kx = (kz + 1u) % 3u;
-    var ky = (kx + 1u) % 3u;
-    // Keep the winding: swap the other two axes when the ray points down its main axis.
-    if (d[kz] < 0.0) {
-        let k = kx;
-        kx = ky;
-        ky = k;
-    }
-    return Shear(vec3<u32>(kx, ky, kz), vec3<f32>(d[kx] / d[kz], d[ky] / d[kz], 1.0 / d[kz]));
-}
-
-fn permute(v: vec3<f32>, k: vec3<u32>) -> vec3<f32> {
-    return vec3<f32>(v[k.x], v[k.y], v[k.z]);
-}
-
 // Woop, Benthin, Wald, "Watertight Ray/Triangle Intersection", JCGT 2(1), 2013. Edge
 // functions are computed in a frame where the ray is the +z axis, so an edge shared by two
 // triangles gives both the same value with opposite signs: no ray slips between them.
@@ -109,6 +81,31 @@ fn triangle_t_watertight(tri: Triangle, ray: Ray, shear: Shear, tmin: f32) -> f3
     }
     let scaled = (rounded(u * a.z) + rounded(v * b.z)) + rounded(w * c.z);
     return t_if_above(rounded(scaled * shear.s.z) / det, tmin);
+}
+
+// The edge functions of a primary ray against a triangle's edge planes: all of one sign
+// (or zero) when the ray's line meets the triangle, edges included. Watertight (see
+// gpu::binning::EyeTriangle): a shared edge's plane is negated bit for bit in its two
+// triangles, and each product is rounded on its own (shaders/exact.wgsl), so that the
+// negation holds on every driver. Then t from the triangle's plane; a ray in that plane
+// never hits. The non-short-circuit & and | keep it free of branches.
+fn eye_triangle_t(tri: EyeTriangle, ray: Ray, tmin: f32) -> f32 {
+    var q = ray.direction;
+    if (ORTHOGRAPHIC) {
+        q = ray.origin;
+    }
+    let e0 = dot3(tri.rows[0].xyz, q) - tri.rows[0].w;
+    let e1 = dot3(tri.rows[1].xyz, q) - tri.rows[1].w;
+    let e2 = dot3(tri.rows[2].xyz, q) - tri.rows[2].w;
+    let inside = ((e0 >= 0.0) & (e1 >= 0.0) & (e2 >= 0.0)) | ((e0 <= 0.0) & (e1 <= 0.0) & (e2 <= 0.0));
+    let plane = tri.rows[3];
+    let denominator = dot3(plane.xyz, ray.direction);
+    var numerator = plane.w;
+    if (ORTHOGRAPHIC) {
+        numerator -= dot3(plane.xyz, ray.origin);
+    }
+    let t = numerator / select(1.0, denominator, denominator != 0.0);
+    return select(NO_HIT, t_if_above(t, tmin), inside & (denominator != 0.0));
 }
 
 // The host computed the normal from the f64 vertices: a cross product of the f32 ones would

@@ -1,3 +1,4 @@
+// uses: params, stats, exact, ray, grid, shading, tree
 // The voxel picture (-visualize_grid; VOXELS; docs/SPEC.md §7, as cpu::Reference::
 // voxel_pixel draws it): a primary ray shows the first occupied cell the 3D-DDA of
 // shaders/grid.wgsl finds, as an opaque box. The host's grid for it is the reference's

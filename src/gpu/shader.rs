@@ -7,34 +7,34 @@ use std::sync::OnceLock;
 
 /// The files of `shaders/`, in the order they are concatenated. WGSL resolves names across
 /// the whole module, so the order is for the reader (and for naga's messages, which count
-/// lines in the composed source): what the host shares first, then the geometry from the
-/// ray outwards, then the searches that use it, then what is done with the nearest hit,
-/// and the entry points last.
+/// lines in the composed source): each file after every file it uses, as its first line
+/// says (`// uses: …`, held to what it uses by the tests below). After [`host_constants`]:
 ///
-/// - `params.wgsl`: `override` switches, the structs shared with the host, the bindings;
-/// - `stats.wgsl`: the `-stats` counters, compiled in only where asked for;
-/// - `exact.wgsl`: products whose rounding no driver chooses, for the signs that decide hits;
-/// - `ray.wgsl`, `camera.wgsl`: the ray, its interval, primary rays;
-/// - `sphere.wgsl`, `ellipsoid.wgsl`, `plane.wgsl`, `triangle.wgsl`: ray/primitive tests,
-///   each returning the nearest t or `NO_HIT`;
-/// - `closest.wgsl`: the `Closest` record, a reference's test, flat loops;
-/// - `bvh.wgsl`: the box test, the nearest-hit and any-hit walks;
-/// - `bins.wgsl`: primary-ray triangles and the packet's walk of a bin;
-/// - `grid.wgsl`: the 3D-DDA through the `-grid`'s cells, nearest and any hit;
-/// - `voxels.wgsl`: the `-visualize_grid` picture, the grid's occupied cells as boxes;
-/// - `occluded.wgsl`: the any-hit query;
-/// - `surface.wgsl`, `texture.wgsl`, `shading.wgsl`, `tree.wgsl`, `output.wgsl`: the nearest hit's surface
-///   and where rays leaving it start, solid textures (Perlin's improved noise), its directly
-///   lit colour, the reflected and refracted rays' colours, the words it leaves in the
-///   output;
-/// - `entry.wgsl`: `main` and `main_bins`;
-/// - `sampling.wgsl`, `filter.wgsl`: with sampling (docs/SPEC.md §8), the samples' positions
-///   and `main_samples` (`main_samples_bins` with bins), then the filters and `main_filter`.
+/// - the parameters: `params.wgsl`, the `override` switches, the structs shared with the
+///   host, the bindings;
+/// - shared helpers: `stats.wgsl`, the `-stats` counters, compiled in only where asked for;
+///   `exact.wgsl`, products whose rounding no driver chooses, for the signs that decide
+///   hits; `ray.wgsl`, the ray, its interval and its per-ray shear for the watertight test;
+/// - geometry: `camera.wgsl`, primary rays; `sphere.wgsl`, `ellipsoid.wgsl`, `plane.wgsl`,
+///   `triangle.wgsl`, ray/primitive tests, each returning the nearest t or `NO_HIT`;
+/// - searches: `closest.wgsl`, the `Closest` record and a reference's test; `bvh.wgsl`, the
+///   box test and the nearest-hit and any-hit walks; `bins.wgsl`, the packet's walk of a
+///   bin; `grid.wgsl`, the 3D-DDA through the `-grid`'s cells; `nearest.wgsl` and
+///   `occluded.wgsl`, the nearest-hit and any-hit queries that choose among them;
+/// - shading: `surface.wgsl`, `texture.wgsl`, `shading.wgsl`, `tree.wgsl`, the nearest hit's
+///   surface and where rays leaving it start, solid textures (Perlin's improved noise), its
+///   directly lit colour, the reflected and refracted rays' colours and what a pixel shows;
+///   `voxels.wgsl`, the `-visualize_grid` picture, the grid's occupied cells as boxes;
+/// - output: `output.wgsl`, the words a pixel leaves in the output; with sampling
+///   (docs/SPEC.md §8), `sampling.wgsl`, the samples' positions and rays and the words they
+///   leave, and `filter.wgsl`, the filters;
+/// - the entry points: `entry.wgsl`, `main`, `main_bins`, `main_bins_shared`,
+///   `main_samples`, `main_samples_bins` and `main_filter`.
 ///
 /// Plain concatenation, not a composer such as naga_oil: nothing is resolved at run time,
 /// no dependency is added, and naga sees one module as it did when the kernel was one file
 /// (lavapipe's compile time, measured with an empty shader cache, did not change).
-pub const FILES: [(&str, &str); 23] = [
+pub const FILES: [(&str, &str); 24] = [
     ("params.wgsl", include_str!("../../shaders/params.wgsl")),
     ("stats.wgsl", include_str!("../../shaders/stats.wgsl")),
     ("exact.wgsl", include_str!("../../shaders/exact.wgsl")),
@@ -48,16 +48,17 @@ pub const FILES: [(&str, &str); 23] = [
     ("bvh.wgsl", include_str!("../../shaders/bvh.wgsl")),
     ("bins.wgsl", include_str!("../../shaders/bins.wgsl")),
     ("grid.wgsl", include_str!("../../shaders/grid.wgsl")),
-    ("voxels.wgsl", include_str!("../../shaders/voxels.wgsl")),
+    ("nearest.wgsl", include_str!("../../shaders/nearest.wgsl")),
     ("occluded.wgsl", include_str!("../../shaders/occluded.wgsl")),
     ("surface.wgsl", include_str!("../../shaders/surface.wgsl")),
     ("texture.wgsl", include_str!("../../shaders/texture.wgsl")),
     ("shading.wgsl", include_str!("../../shaders/shading.wgsl")),
     ("tree.wgsl", include_str!("../../shaders/tree.wgsl")),
+    ("voxels.wgsl", include_str!("../../shaders/voxels.wgsl")),
     ("output.wgsl", include_str!("../../shaders/output.wgsl")),
-    ("entry.wgsl", include_str!("../../shaders/entry.wgsl")),
     ("sampling.wgsl", include_str!("../../shaders/sampling.wgsl")),
     ("filter.wgsl", include_str!("../../shaders/filter.wgsl")),
+    ("entry.wgsl", include_str!("../../shaders/entry.wgsl")),
 ];
 
 /// The constants the host owns, as WGSL `const`s: sizes that must agree with how the host
@@ -132,6 +133,7 @@ pub fn fused_module() -> &'static (naga::Module, Vec<String>) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::collections::{BTreeMap, BTreeSet};
 
     /// Every file of `shaders/` is composed, once: a file added there and not to [`FILES`]
     /// would otherwise be silently left out (or its functions reported missing by naga only
@@ -153,6 +155,212 @@ mod tests {
             assert_eq!(source().matches(&format!("// ---- shaders/{name} ----\n")).count(), 1, "{name}");
         }
         assert!(source().starts_with(&host_constants()));
+    }
+
+    /// The pseudo-file of [`host_constants`] in the `// uses:` lines. Named, not implied: a
+    /// reader who does not find a constant in `shaders/` learns there that the host writes it
+    /// (and that changing it is a change to the Rust it comes from).
+    const HOST: &str = "host";
+
+    /// The uses of a file that comes after the user, each with why. `params.wgsl` declares
+    /// every binding in one place, `sampling` among them, whose struct `Sampling` is the
+    /// samples' own: it stays in `sampling.wgsl`, beside the rest of their layout.
+    const FORWARD_USES: [(&str, &str); 1] = [("params", "sampling")];
+
+    /// WGSL's identifiers and other characters one by one, comments dropped: enough to tell
+    /// declarations from uses, which is all these tests ask of it.
+    fn tokens(text: &str) -> Vec<&str> {
+        let mut out = Vec::new();
+        let bytes = text.as_bytes();
+        let mut i = 0;
+        while i < bytes.len() {
+            let c = bytes[i];
+            if text[i..].starts_with("//") {
+                i += text[i..].find('\n').unwrap_or(text.len() - i);
+            } else if text[i..].starts_with("/*") {
+                i += text[i..].find("*/").map_or(text.len() - i, |e| e + 2);
+            } else if c.is_ascii_alphabetic() || c == b'_' {
+                let len = text[i..].find(|c: char| !(c.is_ascii_alphanumeric() || c == '_')).unwrap_or(text.len() - i);
+                out.push(&text[i..i + len]);
+                i += len;
+            } else if c.is_ascii_whitespace() {
+                i += 1;
+            } else {
+                let len = text[i..].chars().next().unwrap().len_utf8();
+                out.push(&text[i..i + len]);
+                i += len;
+            }
+        }
+        out
+    }
+
+    fn is_identifier(token: &str) -> bool {
+        token.starts_with(|c: char| c.is_ascii_alphabetic() || c == '_')
+    }
+
+    /// What a file declares at module scope (`fn`, `struct`, `const`, `override`, `var`,
+    /// `alias`) and the names it refers to that are not its functions' own: neither a member
+    /// (after `.`), nor a name being declared (before `:`, or after `let`, `var`, `const`),
+    /// nor a parameter or local of the function it is in. A local is taken to hide a
+    /// module-scope name of the same spelling in its whole function, not only in its block.
+    fn scan(text: &str) -> (BTreeSet<&str>, BTreeSet<&str>) {
+        let t = tokens(text);
+        let (mut declared, mut referenced) = (BTreeSet::new(), BTreeSet::new());
+        let mut start = 0;
+        while start < t.len() {
+            // One module-scope item: to its `;`, or to the brace that closes its body.
+            let (mut end, mut depth) = (start, 0);
+            while end + 1 < t.len() {
+                match t[end] {
+                    "{" => depth += 1,
+                    "}" => {
+                        depth -= 1;
+                        if depth == 0 {
+                            break;
+                        }
+                    }
+                    ";" if depth == 0 => break,
+                    _ => {}
+                }
+                end += 1;
+            }
+            let item = &t[start..=end];
+            start = end + 1;
+            // The name after a declaring keyword, past `var`'s `<address space, access>`.
+            let name_after = |k: usize| {
+                let mut j = k + 1;
+                if item[k] == "var" && item[j] == "<" {
+                    j += item[j..].iter().position(|&s| s == ">").unwrap() + 1;
+                }
+                j
+            };
+            let keyword = item.iter().position(|s| ["fn", "struct", "const", "override", "var", "alias"].contains(s));
+            let own = keyword.map(name_after);
+            if let Some(j) = own {
+                declared.insert(item[j]);
+            }
+            let mut locals = BTreeSet::new();
+            if keyword.is_some_and(|k| item[k] == "fn") {
+                for k in own.unwrap() + 1..item.len() {
+                    if ["let", "var", "const"].contains(&item[k]) {
+                        locals.insert(item[name_after(k)]);
+                    } else if is_identifier(item[k]) && item.get(k + 1) == Some(&":") {
+                        locals.insert(item[k]);
+                    }
+                }
+            }
+            for (k, &token) in item.iter().enumerate() {
+                let member = k > 0 && item[k - 1] == ".";
+                let being_declared = Some(k) == own || item.get(k + 1) == Some(&":");
+                if is_identifier(token) && !member && !being_declared && !locals.contains(token) {
+                    referenced.insert(token);
+                }
+            }
+        }
+        (declared, referenced)
+    }
+
+    /// Where `files` (names and texts, in composed order, after [`host_constants`]) break the
+    /// rule of [`FILES`]: a first line `// uses: a, b` naming, in composed order, exactly the
+    /// files (without `.wgsl`, or [`HOST`]) whose declarations the file refers to, each
+    /// before it but for [`FORWARD_USES`]; and no name declared twice.
+    fn use_problems(files: &[(&str, &str)]) -> Vec<String> {
+        let host = host_constants();
+        let mut units = vec![(HOST, host.as_str())];
+        units.extend(files.iter().map(|&(name, text)| (name.strip_suffix(".wgsl").unwrap(), text)));
+        let scans: Vec<_> = units.iter().map(|(_, text)| scan(text)).collect();
+        let mut problems = Vec::new();
+        let mut owner = BTreeMap::new();
+        for (u, (declared, _)) in scans.iter().enumerate() {
+            for &name in declared {
+                if let Some(first) = owner.insert(name, u) {
+                    problems.push(format!("{name} is declared by {} and {}", units[first].0, units[u].0));
+                }
+            }
+        }
+        let index = |name: &str| units.iter().position(|(n, _)| *n == name);
+        for (u, ((file, text), (_, referenced))) in units.iter().zip(&scans).enumerate().skip(1) {
+            // What it uses: each file it refers to, with one name for the messages.
+            let mut uses = BTreeMap::new();
+            for &name in referenced {
+                match owner.get(name) {
+                    Some(&v) if v != u => {
+                        uses.entry(v).or_insert(name);
+                    }
+                    _ => {}
+                }
+            }
+            let Some(header) = text.lines().next().and_then(|l| l.strip_prefix("// uses:")) else {
+                problems.push(format!("{file}.wgsl does not start with a `// uses:` line"));
+                continue;
+            };
+            let listed: Vec<&str> = header.split(',').map(str::trim).filter(|s| !s.is_empty()).collect();
+            let mut said = BTreeSet::new();
+            for name in &listed {
+                match index(name) {
+                    Some(v) => {
+                        said.insert(v);
+                    }
+                    None => problems.push(format!("{file}.wgsl says it uses {name}, which is no file")),
+                }
+            }
+            let order: Vec<_> = listed.iter().filter_map(|n| index(n)).collect();
+            if !order.is_sorted() {
+                problems.push(format!("{file}.wgsl lists its uses out of the composed order: {listed:?}"));
+            }
+            for (&v, name) in &uses {
+                if !said.contains(&v) {
+                    problems.push(format!("{file}.wgsl uses {} ({name}) and does not say so", units[v].0));
+                }
+                if v > u && !FORWARD_USES.contains(&(file, units[v].0)) {
+                    problems.push(format!("{file}.wgsl uses {} ({name}), which comes after it", units[v].0));
+                }
+            }
+            for &v in said.difference(&uses.keys().copied().collect()) {
+                problems.push(format!("{file}.wgsl says it uses {} and uses nothing of it", units[v].0));
+            }
+        }
+        problems
+    }
+
+    #[test]
+    fn each_file_says_what_it_uses_and_comes_after_it() {
+        let problems = use_problems(&FILES);
+        assert!(problems.is_empty(), "{}", problems.join("\n"));
+    }
+
+    /// The check above fails where a header leaves out a use, claims one it does not make,
+    /// or the file uses one that comes later.
+    #[test]
+    fn a_header_wrong_either_way_is_caught() {
+        let with = |file: &str, from: &str, to: &str| -> Vec<String> {
+            let texts: Vec<(&str, String)> = FILES
+                .iter()
+                .map(|&(name, text)| (name, if name == file { text.replacen(from, to, 1) } else { text.to_string() }))
+                .collect();
+            let files: Vec<(&str, &str)> = texts.iter().map(|(n, t)| (*n, t.as_str())).collect();
+            use_problems(&files)
+        };
+        assert!(with("none", "", "").is_empty());
+        let omitted = with("plane.wgsl", "// uses: params, exact, ray\n", "// uses: params, exact\n");
+        assert_eq!(omitted, ["plane.wgsl uses ray (Ray) and does not say so"]);
+        let over = with("plane.wgsl", "// uses: params, exact, ray\n", "// uses: params, stats, exact, ray\n");
+        assert_eq!(over, ["plane.wgsl says it uses stats and uses nothing of it"]);
+        let later = with("plane.wgsl", "return NO_HIT;", "return no_hit().t;");
+        assert_eq!(
+            later,
+            [
+                "plane.wgsl uses closest (no_hit) and does not say so",
+                "plane.wgsl uses closest (no_hit), which comes after it"
+            ]
+        );
+        // A parameter hides the module's name; a member is no use of it.
+        let hidden = with(
+            "plane.wgsl",
+            "fn plane_t(p: Plane, ray: Ray, tmin: f32) -> f32 {",
+            "fn plane_t(p: Plane, ray: Ray, count: f32) -> f32 {\n    let tmin = p.count + count;",
+        );
+        assert!(hidden.is_empty(), "{hidden:?}");
     }
 
     #[test]
