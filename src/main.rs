@@ -314,11 +314,10 @@ fn say_warnings(warnings: &[SceneWarning], habits: Habits) {
 /// lavapipe (Mesa's CPU Vulkan driver) cuts each dispatch's workgroups into one contiguous
 /// share per thread, a thread per core by default, and the dispatch lasts as long as its
 /// slowest share: bands of an image are not equally busy, and a thread may start late. Two
-/// shares per core let the cores that finish early take up the rest: bunny_40k's kernel at
-/// 512² took 5.4 ms with 2 threads on 2 cores and 3.6 ms with 4 (docs/lavapipe.md, "A
-/// dispatch is cut into one share per thread"). Set before any thread exists, unless the
-/// user chose; on one core lavapipe runs dispatches on the calling thread, and other drivers
-/// do not read it.
+/// shares per core let the cores that finish early take up the rest (docs/lavapipe.md, "A
+/// dispatch is cut into one share per thread"; the measurements are in docs/performance.md,
+/// "Measured design choices"). Set before any thread exists, unless the user chose; on one
+/// core lavapipe runs dispatches on the calling thread, and other drivers do not read it.
 fn split_lavapipe_dispatches_finer() {
     const LAVAPIPE_THREADS: &str = "LP_NUM_THREADS";
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
