@@ -6,7 +6,7 @@ use app::args::{
     BackendChoice, BenchArgs, Command, GalleryArgs, GradeArgs, Habits, RenderArgs, Split, StitchArgs, Verbosity,
 };
 use app::backend::Backend;
-use app::exit::{self, note, say, Failure};
+use app::exit::{self, say, Failure};
 use app::job::LineReport;
 use raycaster::render::Outputs;
 use raycaster::scene::SceneWarning;
@@ -78,12 +78,12 @@ fn render(args: &RenderArgs, habits: Habits) -> Result<(), Failure> {
         let report = app::job::run(args, &backend, progress)?;
         (backend, report)
     };
-    warn(&report.warnings, habits);
+    say_warnings(&report.warnings, habits);
     if let Some(fallback) = report.notice.as_ref().filter(|_| habits.verbosity != Verbosity::Quiet) {
         say(&format!("warning: {fallback}"));
     }
     if habits.verbosity == Verbosity::Verbose {
-        notice(&report.verbose_lines(&backend, args));
+        report.verbose_lines(&backend, args).iter().for_each(|line| say(line));
     }
     if args.stats {
         let seconds = (report.render_ms + report.write_ms) / 1e3;
@@ -103,7 +103,7 @@ fn show_live(args: &RenderArgs, habits: Habits) -> Result<Option<String>, Failur
         return Ok(Some(why));
     }
     let (scene, _) = app::job::load(args)?;
-    warn(&scene.warnings, habits);
+    say_warnings(&scene.warnings, habits);
     match app::window::show(args, scene, habits.verbosity == Verbosity::Verbose)? {
         app::window::Shown::Closed => Ok(None),
         app::window::Shown::NoWindow(why) => Ok(Some(why)),
@@ -118,7 +118,7 @@ fn show_live(_: &RenderArgs, _: Habits) -> Result<Option<String>, Failure> {
 fn compare(args: &RenderArgs, outputs: Outputs, max_diff_pixels: Option<u64>, habits: Habits) -> Result<(), Failure> {
     let gpu = open_gpu()?;
     let comparison = app::job::compare(args, outputs, &gpu)?;
-    warn(&comparison.warnings, habits);
+    say_warnings(&comparison.warnings, habits);
     exit::print(&format!(
         "gpu ({}) against the f64 reference ({} triangles, {} spheres):\n{}",
         gpu.adapter_info().name,
@@ -156,9 +156,9 @@ fn batch(file: &std::path::Path, choice: BackendChoice, shard: Option<Split>, ha
             },
         );
     if habits.verbosity == Verbosity::Verbose {
-        notice(&[format!("backend: {}", backend.describe())]);
-        notice(&timings);
-        notice(&[format!("memory: {}", app::memory::describe_peak())]);
+        say(&format!("backend: {}", backend.describe()));
+        timings.iter().for_each(|line| say(line));
+        say(&format!("memory: {}", app::memory::describe_peak()));
     }
     if count.failed > 0 {
         return Err(Failure::Failed(format!(
@@ -182,7 +182,7 @@ fn stitch(args: &StitchArgs, habits: Habits) -> Result<(), Failure> {
         Failure::Failed(format!("stitch: {last}"))
     })?;
     if habits.verbosity == Verbosity::Verbose {
-        notice(&[format!("stitch: {stitched} parts")]);
+        say(&format!("stitch: {stitched} parts"));
     }
     Ok(())
 }
@@ -200,7 +200,7 @@ fn bench(args: &BenchArgs, habits: Habits) -> Result<(), Failure> {
     let mut rows = Vec::new();
     for case in &cases {
         if !quiet {
-            note(&format!("bench: {} {}×{} ({})", case.name, case.width, case.height, case.triangle_test.name()));
+            say(&format!("bench: {} {}×{} ({})", case.name, case.width, case.height, case.triangle_test.name()));
         }
         rows.push(bench::run_case(&gpu, case, args.runs).map_err(|e| failed(&format!("{}: {e}", case.name)))?);
     }
@@ -211,7 +211,7 @@ fn bench(args: &BenchArgs, habits: Habits) -> Result<(), Failure> {
         .and_then(|()| write_plot(&rows, &args.out))
         .map_err(|e| failed(&e))?;
     if !quiet {
-        note(&format!(
+        say(&format!(
             "bench: wrote {}/bench.csv{}",
             args.out.display(),
             if cfg!(feature = "plot") { " and bench.png" } else { "" }
@@ -303,31 +303,21 @@ fn open_gpu() -> Result<raycaster::gpu::GpuRenderer, Failure> {
     Ok(raycaster::gpu::GpuRenderer::new()?)
 }
 
-/// The scene's warnings (located, `FILE:LINE:COL: warning: ...`), unless `-q`.
-fn warn(warnings: &[SceneWarning], habits: Habits) {
-    if habits.verbosity == Verbosity::Quiet {
-        return;
-    }
-    for w in warnings {
-        say(&w.to_string());
-    }
-}
-
-/// `--verbose`'s lines, on stderr so that stdout stays the command's output.
-fn notice(lines: &[String]) {
-    for line in lines {
-        say(line);
+/// The scene's warnings, unless `-q`. Each is located as errors are
+/// (`FILE:LINE:COL: warning: ...`, [`raycaster::scene::SceneWarning`]'s text).
+fn say_warnings(warnings: &[SceneWarning], habits: Habits) {
+    if habits.verbosity != Verbosity::Quiet {
+        warnings.iter().for_each(|w| say(&w.to_string()));
     }
 }
 
 /// lavapipe (Mesa's CPU Vulkan driver) cuts each dispatch's workgroups into one contiguous
 /// share per thread, a thread per core by default, and the dispatch lasts as long as its
 /// slowest share: bands of an image are not equally busy, and a thread may start late. Two
-/// shares per core let the cores that finish early take up the rest: bunny_40k's kernel at
-/// 512² took 5.4 ms with 2 threads on 2 cores and 3.6 ms with 4 (docs/lavapipe.md, "A
-/// dispatch is cut into one share per thread"). Set before any thread exists, unless the
-/// user chose; on one core lavapipe runs dispatches on the calling thread, and other drivers
-/// do not read it.
+/// shares per core let the cores that finish early take up the rest (docs/lavapipe.md, "A
+/// dispatch is cut into one share per thread"; the measurements are in docs/performance.md,
+/// "Measured design choices"). Set before any thread exists, unless the user chose; on one
+/// core lavapipe runs dispatches on the calling thread, and other drivers do not read it.
 fn split_lavapipe_dispatches_finer() {
     const LAVAPIPE_THREADS: &str = "LP_NUM_THREADS";
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());

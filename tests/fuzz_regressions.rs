@@ -1,5 +1,5 @@
 //! Inputs that made the scene front end slow or crash, kept once fixed, and the committed
-//! seeds the fuzzers start from. The fuzz targets are in `fuzz/` (see the README's "Fuzzing"
+//! seeds the fuzzers start from. The fuzz targets are in `fuzz/` (see docs/testing.md, "Fuzzing"
 //! section); each entry says what the input did.
 
 use raycaster::scene::{parse_obj, parse_scene};

@@ -49,15 +49,11 @@ pub fn report(failure: &Failure) -> u8 {
     failure.status()
 }
 
-/// One line on stderr, `raycaster: ` first.
+/// One line on stderr, `raycaster: ` first: the one way the command tells the user
+/// something besides its output (errors, warnings, notes, `-v`'s lines, progress of
+/// `bench`). A closed stderr is ignored: there is no one left to tell.
 pub fn say(line: &str) {
-    note(&format!("raycaster: {line}"));
-}
-
-/// One line on stderr as it is (progress). A closed stderr is ignored: there is no one left
-/// to tell.
-pub fn note(line: &str) {
-    let _ = writeln!(std::io::stderr().lock(), "{line}");
+    let _ = writeln!(std::io::stderr().lock(), "raycaster: {line}");
 }
 
 /// Text on stdout. A reader that has gone away (a closed pipe) drops the rest quietly; any

@@ -1,7 +1,8 @@
-//! The one table of flags (docs/SPEC.md §1): each flag's spellings, its value, the commands
-//! that take it, its help and where its value goes. Parsing ([`crate::app::cli`]), the
-//! usage text ([`usage`]) and the "did you mean" suggestions ([`unknown_flag`]) all read
-//! this table, so a flag is added, renamed or documented in one place.
+//! The one table of flags: each flag's spellings, its value, the commands that take it, its
+//! help and where its value goes. Parsing ([`crate::app::cli`]), the usage text ([`usage`]),
+//! the "did you mean" suggestions ([`unknown_flag`]) and docs/SPEC.md §1's table
+//! (`markdown_table`, checked by a test below) all read this table, so a flag is added,
+//! renamed or documented in one place.
 
 use crate::app::args::{
     BackendChoice, DepthArgs, OutputPaths, Picture, Pictures, Split, UsageError, Verbosity, MAX_THREADS,
@@ -224,6 +225,11 @@ pub struct Flag {
     /// A verb that refuses the flag for a reason other than not knowing it.
     pub refused: Option<(Verb, &'static str)>,
     pub help: &'static str,
+    /// What docs/SPEC.md §1 adds to the help: the limits of the value and the section that
+    /// defines the flag's effect. Empty where the help says it all. Only the test that
+    /// checks the spec's copy reads it.
+    #[cfg_attr(not(test), allow(dead_code))]
+    pub details: &'static str,
 }
 
 use Verb::{Batch, Bench, Compare, Gallery, Grade, Render, Selftest, Stitch};
@@ -239,28 +245,34 @@ pub static FLAGS: &[Flag] = &[
     Flag::course("input", "SCENE", Takes::Path(|g, path| g.input = Some(path)), IMAGE_VERBS)
         .required(RENDER_VERBS)
         .once()
-        .help("scene file (obj_file paths resolve from its folder)"),
+        .help("scene file (obj_file paths resolve from its folder, then the working\ndirectory)"),
     Flag::course("size", "W H", Takes::Size(|g, size| g.size = Some(size)), IMAGE_VERBS)
         .required(RENDER_VERBS)
         .once()
-        .help("image size in pixels"),
+        .help("image size in pixels")
+        .details("each 1…65535 (TGA keeps sizes in 16 bits), and W·H at most 2²⁸ (16384²)"),
     Flag::course("output", "FILE", Takes::Path(|g, path| g.files.color = Some(path)), IMAGE_VERBS)
         .once()
-        .help("shaded image (.tga or .png; .exr: linear, unclamped)"),
+        .help("shaded image (.tga or .png; .exr: linear, unclamped)")
+        .details("§5"),
     Flag::course("normals", "FILE", Takes::Path(|g, path| g.files.normals = Some(path)), IMAGE_VERBS)
         .once()
-        .help("normal visualisation |N| (.tga or .png; .exr: the signed normal)"),
+        .help("normal visualisation |N| (.tga or .png; .exr: the signed normal)")
+        .details("§5"),
     Flag::course("depth", "MIN MAX FILE", Takes::Depth(|g, depth| g.files.depth = Some(depth)), IMAGE_VERBS)
         .once()
         .help(
             "depth visualisation, white at MIN, black at MAX (.tga or .png;\n\
              .exr: the distance t itself, +inf where nothing is hit; MIN and\n\
              MAX are then not used)",
-        ),
+        )
+        .details("MIN < MAX, both finite; §5"),
     Flag::course("shade_back", "", Takes::Switch(|g| g.shading.shade_back = true), RENDER_VERBS)
-        .help("shade back-facing hits as if they faced the viewer"),
+        .help("shade back-facing hits as if they faced the viewer")
+        .details("§5"),
     Flag::course("shadows", "", Takes::Switch(|g| g.shading.shadows = true), RENDER_VERBS)
-        .help("cast a shadow ray to every light"),
+        .help("cast a shadow ray to every light")
+        .details("to a point light, only up to the light; §5"),
     Flag::course(
         "bounces",
         "N",
@@ -272,67 +284,86 @@ pub static FLAGS: &[Flag] = &[
         },
         RENDER_VERBS,
     )
-    .help("reflected and refracted rays, at most N deep (default 0: local\nshading only)"),
+    .help("reflected and refracted rays, at most N deep (default 0: local\nshading only)")
+    .details("§5"),
     Flag::course("weight", "W", Takes::Real { what: "a ray weight", set: |g, w| g.shading.weight = w }, RENDER_VERBS)
-        .help("no secondary ray whose weight falls below W (default 0)"),
+        .help("no secondary ray whose weight falls below W (default 0)")
+        .details("§5"),
     Flag::course("gui", "", Takes::Switch(|g| g.gui = true), RENDER_VERBS)
-        .help("show the render live in a window (mouse: orbit, pan, zoom; r writes the files)"),
+        .help("show the render live in a window (mouse: orbit, pan, zoom; r writes the files)")
+        .details(
+            "§9. Where no window can open (no display, a `batch`, a `--tile` part, a build \
+            without the `gui` feature) the line renders and writes as without `-gui`, and \
+            one notice says why (`-q` silences it); a line with `-gui` and no image flag \
+            then renders nothing, says so, and exits 0",
+        ),
     Flag::course("tessellation", "THETA PHI", Takes::Steps(|g, _| g.preview = true), RENDER_VERBS)
-        .help("sphere facets of the course's OpenGL preview: accepted, ignored"),
+        .help("sphere facets of the course's OpenGL preview: accepted, ignored")
+        .details("whole numbers ≥ 1; a notice says so when `-gui` is absent"),
     Flag::course("gouraud", "", Takes::Switch(|g| g.preview = true), RENDER_VERBS)
         .help("smooth spheres in the course's OpenGL preview: accepted, ignored"),
     Flag::course("grid", "NX NY NZ", Takes::Cells(|g, size| g.grid = Some(size)), RENDER_VERBS).help(
         "a uniform grid of NX×NY×NZ cells over the scene's bounds (planes\n\
          outside it) through which every ray finds what it hits",
-    ),
+    )
+    .details("whole numbers ≥ 1, at most 2²⁴ cells in all; §7"),
     Flag::course("visualize_grid", "", Takes::Switch(|g| g.visualize_grid = true), RENDER_VERBS)
-        .help("render the grid's occupied cells as boxes, coloured by how many\nprimitives each holds"),
+        .help("render the grid's occupied cells as boxes, coloured by how many\nprimitives each holds")
+        .details("drawn instead of the objects; needs `-grid`; §7"),
     Flag::course("visualize_grid_count", "", Takes::Switch(|g| g.visualize_grid = true), RENDER_VERBS)
-        .help("the course's optional count colouring: the same as -visualize_grid"),
+        .help("the course's optional count colouring: the same as -visualize_grid")
+        .details("§7"),
     Flag::course("stats", "", Takes::Switch(|g| g.stats = true), Verbs::of(&[Render]))
-        .help("print the course's ray tracing statistics on stdout at the end"),
+        .help("print the course's ray tracing statistics on stdout at the end")
+        .details("not with `--tile` (a usage error); §7"),
     Flag::course(
         "random_samples",
         "N",
         Takes::Samples { square: false, set: |g, n| g.sampler = Some(Sampler::Random(n)) },
         RENDER_VERBS,
     )
-    .help("N samples per pixel at hashed random positions (see --seed)"),
+    .help("N samples per pixel at hashed random positions (see --seed)")
+    .details("§8"),
     Flag::course(
         "uniform_samples",
         "N",
         Takes::Samples { square: true, set: |g, n| g.sampler = Some(Sampler::Uniform(n)) },
         RENDER_VERBS,
     )
-    .help("N samples per pixel on a √N×√N grid (N a square number)"),
+    .help("N samples per pixel on a √N×√N grid (N a square number)")
+    .details("§8"),
     Flag::course(
         "jittered_samples",
         "N",
         Takes::Samples { square: true, set: |g, n| g.sampler = Some(Sampler::Jittered(n)) },
         RENDER_VERBS,
     )
-    .help("N samples per pixel, one at a hashed position in each cell of a\n√N×√N grid (N a square number)"),
+    .help("N samples per pixel, one at a hashed position in each cell of a\n√N×√N grid (N a square number)")
+    .details("§8"),
     Flag::course(
         "box_filter",
         "R",
         Takes::Positive { what: "a radius", set: |g, r| g.filter = Some(Filter::Box(r)) },
         RENDER_VERBS,
     )
-    .help("each pixel the average of the samples within R pixels across\n(default with a sampler: R = 0.5, the pixel's own samples)"),
+    .help("each pixel the average of the samples within R pixels across\n(default with a sampler: R = 0.5, the pixel's own samples)")
+    .details("§8"),
     Flag::course(
         "tent_filter",
         "R",
         Takes::Positive { what: "a radius", set: |g, r| g.filter = Some(Filter::Tent(r)) },
         RENDER_VERBS,
     )
-    .help("samples weighted 1 at the pixel's centre down to 0 at distance R"),
+    .help("samples weighted 1 at the pixel's centre down to 0 at distance R")
+    .details("the weight is `max(0, 1 − d/R)`; §8"),
     Flag::course(
         "gaussian_filter",
         "SIGMA",
         Takes::Positive { what: "a sigma", set: |g, s| g.filter = Some(Filter::Gaussian(s)) },
         RENDER_VERBS,
     )
-    .help("samples weighted exp(-d²/2σ²), none beyond 2σ"),
+    .help("samples weighted exp(-d²/2σ²), none beyond 2σ")
+    .details("§8"),
     Flag::course(
         "render_samples",
         "FILE ZOOM",
@@ -340,21 +371,25 @@ pub static FLAGS: &[Flag] = &[
         Verbs::of(&[Render]),
     )
     .once()
-    .help("the samples' picture: each pixel enlarged ZOOM times, a dot of\nits colour at each sample"),
+    .help("the samples' picture: each pixel enlarged ZOOM times, a dot of\nits colour at each sample")
+    .details("ZOOM a whole number ≥ 1; §8"),
     Flag::course("render_filter", "FILE ZOOM", Takes::Picture(|g, p| g.pictures.filter = Some(p)), Verbs::of(&[Render]))
         .once()
-        .help("the filter's picture: its weights around the centre pixel,\nenlarged ZOOM times"),
+        .help("the filter's picture: its weights around the centre pixel,\nenlarged ZOOM times")
+        .details("ZOOM a whole number ≥ 1; §8"),
     Flag::ours(
         "seed",
         "N",
         Takes::Number { what: "a seed", min: 0, max: u32::MAX as u64, set: |g, n| g.seed = Some(n as u32) },
         RENDER_VERBS,
     )
-    .help("the seed of random and jittered sample positions (default 0)"),
+    .help("the seed of random and jittered sample positions (default 0)")
+    .details("§8"),
     Flag::ours("specular_fix", "", Takes::Switch(|g| g.shading.specular_fix = true), RENDER_VERBS).help(
         "the handout's optional specular fix: the specular term times\n\
          N·L",
-    ),
+    )
+    .details("§5"),
     Flag::ours(
         "backend",
         "B",
@@ -368,7 +403,8 @@ pub static FLAGS: &[Flag] = &[
     .help(
         "gpu, cpu (the f64 reference) or auto (default: the GPU if one is\n\
          found, else the CPU with a notice; grade: cpu, the ground truth)",
-    ),
+    )
+    .details("§6"),
     Flag::ours(
         "triangle_test",
         "T",
@@ -378,7 +414,8 @@ pub static FLAGS: &[Flag] = &[
         },
         RENDER_VERBS,
     )
-    .help("the GPU's ray/triangle test (default watertight)"),
+    .help("the GPU's ray/triangle test (default watertight)")
+    .details("docs/accuracy.md"),
     Flag::ours(
         "sphere_test",
         "S",
@@ -388,10 +425,15 @@ pub static FLAGS: &[Flag] = &[
         },
         RENDER_VERBS,
     )
-    .help("the GPU's ray/sphere test (default robust)"),
+    .help("the GPU's ray/sphere test (default robust)")
+    .details("docs/accuracy.md"),
     Flag::ours("tile", "K/N", Takes::Split(|g, tile| g.tile = Some(tile)), Verbs::of(&[Render])).help(
         "render only band K (0-based, from the top) of N bands of rows\n\
          and write FILE.part-K-of-N beside each output; see stitch",
+    )
+    .details(
+        "N at most the height; the part files and `stitch`: docs/usage.md, \"Renders \
+        split across machines\"",
     ),
     Flag::ours("quiet", "", Takes::Verbosity(Verbosity::Quiet), Verbs::EVERY)
         .short("q")
@@ -412,8 +454,10 @@ pub static FLAGS: &[Flag] = &[
         Verbs::EVERY,
     )
     .help("threads of the CPU reference (default: one per core)"),
-    Flag::ours("help", "", Takes::Answer(Answer::Help), Verbs::EVERY).short("h").help("this text"),
-    Flag::ours("version", "", Takes::Answer(Answer::Version), Verbs::EVERY).short("V").help("the version"),
+    Flag::ours("help", "", Takes::Answer(Answer::Help), Verbs::EVERY).short("h").help("this text")
+        .details("on stdout, status 0"),
+    Flag::ours("version", "", Takes::Answer(Answer::Version), Verbs::EVERY).short("V").help("the version")
+        .details("on stdout, status 0"),
     Flag::ours("keep_parts", "", Takes::Switch(|g| g.keep_parts = true), Verbs::of(&[Stitch]))
         .help("keep the part files"),
     Flag::ours("shard", "K/N", Takes::Split(|g, shard| g.shard = Some(shard)), Verbs::of(&[Batch])).help(
@@ -451,10 +495,12 @@ pub static FLAGS: &[Flag] = &[
         Takes::Number { what: "a number of pixels", min: 0, max: u64::MAX, set: |g, n| g.max_diff_pixels = Some(n) },
         Verbs::of(&[Compare, Grade]),
     )
-    .help("pixels an output may have more than 1 level off (compare's\ndefault 0.1 %; grade's: no limit)"),
+    .help("pixels an output may have more than 1 level off (compare's\ndefault 0.1 %; grade's: no limit)")
+    .details("compare: §6; grade: docs/grading.md"),
     Flag::ours("images", "DIR", Takes::Path(|g, dir| g.images = Some(dir)), Verbs::of(&[Grade]))
         .once()
-        .help("the student's images, named as commands.txt names them (.png\nfor .tga is accepted)"),
+        .help("the student's images, named as commands.txt names them (.png\nfor .tga is accepted)")
+        .details("or `.tga` for `.png`, when the file named is missing"),
     Flag::ours(
         "run",
         "COMMAND",
@@ -465,32 +511,37 @@ pub static FLAGS: &[Flag] = &[
     .help(
         "the student's program (split at spaces), run on each line of\n\
          commands.txt in a copy of the assignment's folder",
-    ),
+    )
+    .details("exactly one of `--images` and `--run`"),
     Flag::ours(
         "time_limit",
         "S",
         Takes::Positive { what: "a number of seconds", set: |g, s| g.time_limit = Some(s) },
         Verbs::of(&[Grade]),
     )
-    .help("seconds --run's program may take on one line (default 60)"),
+    .help("seconds --run's program may take on one line (default 60)")
+    .details("only with `--run`; on Unix the program's whole process group is killed then"),
     Flag::ours(
         "max_flip_mean",
         "X",
         Takes::Real { what: "a FLIP error", set: |g, x| g.max_flip_mean = Some(x) },
         Verbs::of(&[Grade]),
     )
-    .help("the mean FLIP error an image may have and pass (default 0.05)"),
+    .help("the mean FLIP error an image may have and pass (default 0.05)")
+    .details("docs/grading.md"),
     Flag::ours(
         "max_flip_p99",
         "X",
         Takes::Real { what: "a FLIP error", set: |g, x| g.max_flip_p99 = Some(x) },
         Verbs::of(&[Grade]),
     )
-    .help("the FLIP error 99 % of an image's pixels may not pass (default\n0.25)"),
+    .help("the FLIP error 99 % of an image's pixels may not pass (default\n0.25)")
+    .details("docs/grading.md"),
     Flag::ours("html", "FILE", Takes::Path(|g, path| g.html = Some(path)), Verbs::of(&[Grade, Gallery]))
         .required(Verbs::of(&[Gallery]))
         .once()
-        .help("an HTML page of the images, with FILE_files/ beside it for them"),
+        .help("an HTML page of the images, with FILE_files/ beside it for them")
+        .details("grade's page lists the worst first"),
 ];
 
 /// The table's rows say only what differs from these defaults: optional, given any number
@@ -509,6 +560,7 @@ impl Flag {
             once: false,
             refused: None,
             help: "",
+            details: "",
         }
     }
 
@@ -535,6 +587,10 @@ impl Flag {
 
     const fn help(self, help: &'static str) -> Flag {
         Flag { help, ..self }
+    }
+
+    const fn details(self, details: &'static str) -> Flag {
+        Flag { details, ..self }
     }
 }
 
@@ -703,6 +759,13 @@ one value also takes it after '=' (--backend=cpu); -size and -depth take theirs 
 -q, -v and --threads apply to every command. At least one of -output, -normals, -depth is
 required. On a terminal, work that lasts more than a second shows a progress bar on stderr.";
 
+/// The lines around docs/SPEC.md §1's copy of [`markdown_table`].
+#[cfg(test)]
+const SPEC_TABLE_BEGIN: &str =
+    "<!-- The flag table, generated from src/app/flags.rs (markdown_table): edit it there. -->";
+#[cfg(test)]
+const SPEC_TABLE_END: &str = "<!-- End of the generated flag table. -->";
+
 /// Synopses are wrapped to this width.
 const WIDTH: usize = 90;
 
@@ -759,6 +822,51 @@ fn synopsis(start: &str, verb: Verb, operand: &str) -> String {
     lines.join("\n") + "\n"
 }
 
+/// The flag table as docs/SPEC.md §1 shows it, in Markdown: one row a flag, in help's order,
+/// with the commands that take it and its help (joined into one line) followed by its
+/// [`Flag::details`]. The copy in the spec is checked against this by a test, which is
+/// all that calls it: the spec is edited by pasting what the test prints.
+#[cfg(test)]
+pub fn markdown_table() -> String {
+    let cell = |text: &str| text.replace('\n', " ").replace('|', "\\|");
+    let mut table = String::from("| flag | value | commands | effect |\n| --- | --- | --- | --- |\n");
+    for flag in FLAGS {
+        let value = match &flag.takes {
+            Takes::Choice { names, .. } => names().join("|"),
+            _ => flag.metavar.to_string(),
+        };
+        let value = if value.is_empty() { String::new() } else { format!("`{}`", cell(&value)) };
+        let commands = if flag.verbs == Verbs::EVERY {
+            "all".to_string()
+        } else {
+            let verbs = [Render, Compare, Batch, Stitch, Bench, Grade, Gallery, Selftest];
+            let named = verbs.into_iter().filter(|v| flag.verbs.contains(*v)).map(|v| {
+                let name = if v == Render { "render" } else { v.name() };
+                if flag.required.contains(v) {
+                    format!("{name} (required)")
+                } else {
+                    name.to_string()
+                }
+            });
+            named.collect::<Vec<_>>().join(", ")
+        };
+        // The value's limits, from what parsing checks.
+        let limits = match &flag.takes {
+            Takes::Number { min, max, .. } if *max < u64::MAX => format!("{} from {min} to {max}", flag.metavar),
+            Takes::Samples { .. } => {
+                format!("N from 1 to {}", raycaster::sampling::MAX_SAMPLES)
+            }
+            Takes::Positive { .. } => format!("{} > 0", flag.metavar),
+            Takes::Real { .. } => format!("{} ≥ 0", flag.metavar),
+            _ => String::new(),
+        };
+        let effect = [flag.help, limits.as_str(), flag.details].into_iter().filter(|part| !part.is_empty());
+        let effect = effect.map(cell).collect::<Vec<_>>().join("; ");
+        table += &format!("| `{}` | {value} | {commands} | {effect} |\n", flag.spelled());
+    }
+    table
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -792,6 +900,22 @@ mod tests {
             let lines = synopsis("raycaster", verb, "");
             assert!(lines.lines().all(|l| l.chars().count() <= WIDTH), "{lines}");
         }
+    }
+
+    /// docs/SPEC.md §1's flag table is the one [`markdown_table`] generates from [`FLAGS`]:
+    /// a flag added or changed here without the spec fails, printing the block to paste.
+    #[test]
+    fn the_specs_flag_table_is_generated_from_this_one() {
+        let spec = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/docs/SPEC.md")).unwrap();
+        let (begin, end) = (SPEC_TABLE_BEGIN, SPEC_TABLE_END);
+        let start = spec.find(begin).expect("docs/SPEC.md has the flag table's first marker") + begin.len();
+        let stop = start + spec[start..].find(end).expect("docs/SPEC.md has the flag table's last marker");
+        let expected = markdown_table();
+        assert!(
+            spec[start..stop].trim_matches('\n') == expected.trim_end(),
+            "docs/SPEC.md §1's flag table differs from src/app/flags.rs; the table to paste between \
+             the markers:\n\n{expected}"
+        );
     }
 
     #[test]

@@ -1,4 +1,4 @@
-//! The part files of a render split across machines (docs: README, "Renders split across
+//! The part files of a render split across machines (docs/usage.md, "Renders split across
 //! machines"): `OUT.part-K-of-N` beside each output, a short text header that identifies
 //! the render and the band, then the band's final pixel data. This module writes and reads
 //! them and knows nothing of how the pixels were made or are stitched.
