@@ -2,7 +2,7 @@
 
 use crate::app::args::BackendChoice;
 use raycaster::cpu::Reference;
-use raycaster::gpu::tree::TreeShape;
+use raycaster::gpu::ray_tree::TreeShape;
 use raycaster::gpu::{GpuError, GpuRenderer, RenderStats};
 use raycaster::image_io;
 use raycaster::render::{row_tiles, Frame, Output, RenderOptions};
@@ -16,7 +16,7 @@ const CPU_TILE_PIXELS: u32 = 1 << 18;
 pub enum Backend {
     /// The GPU kernel; with `fallback` (`--backend auto`), scenes its f32 kernel cannot
     /// render faithfully ([`raycaster::gpu::precision`]) or does not shade yet
-    /// ([`raycaster::gpu::support`]) go to the CPU reference instead.
+    /// ([`raycaster::gpu::unsupported`]) go to the CPU reference instead.
     Gpu(Box<GpuRenderer>, Fallback),
     Cpu,
 }

@@ -5,7 +5,59 @@
 //! only the bindings its kernels still reference once [`super::specialise`] has cut what
 //! the scene does not use (a sphere scene binds no triangles, no hierarchy, no bins).
 
-use super::{Binding, BINDINGS};
+use super::layout;
+
+/// One of the kernel's bindings, in `@binding` order: the name of its WGSL variable,
+/// whether the kernel writes it, and the size of one element (the least a binding holds).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Binding {
+    pub name: &'static str,
+    pub writable: bool,
+    pub element_bytes: u64,
+}
+
+const fn binding<T>(name: &'static str, writable: bool) -> Binding {
+    Binding { name, writable, element_bytes: std::mem::size_of::<T>() as u64 }
+}
+
+/// Every binding of the kernel (`shaders/params.wgsl`), index = `@binding`. The bind-group layout and
+/// every bind group are built from this table, and `tests/layout.rs` checks it against the
+/// shader's own declarations (names, order, access, element sizes).
+pub const BINDINGS: [Binding; 18] = [
+    binding::<layout::Params>("params", false),
+    binding::<layout::GpuSphere>("spheres", false),
+    binding::<layout::GpuEllipsoid>("ellipsoids", false),
+    binding::<layout::GpuPlane>("planes", false),
+    binding::<layout::GpuTriangle>("triangles", false),
+    binding::<layout::GpuMaterial>("materials", false),
+    binding::<layout::GpuLight>("lights", false),
+    binding::<u32>("pixels", true),
+    binding::<crate::bvh::BvhNode>("nodes", false),
+    binding::<u32>("prim_refs", false),
+    binding::<layout::EyeTriangle>("eye_triangles", false),
+    binding::<[u32; 2]>("bin_ranges", false),
+    binding::<layout::BinItem>("bin_items", false),
+    binding::<layout::GpuTexture>("textures", false),
+    binding::<u32>("permutation", false),
+    binding::<u32>("counters", true),
+    binding::<u32>("samples", true),
+    binding::<layout::GpuSampling>("sampling", false),
+];
+
+/// The `@binding` of the output (`pixels`).
+pub(super) const OUTPUT_BINDING: usize = 7;
+
+/// The `@binding`s of the bins' lists (per slot where the frame has bins: each tile's band).
+pub(super) const BIN_RANGES_BINDING: usize = 11;
+pub(super) const BIN_ITEMS_BINDING: usize = 12;
+
+/// The `@binding` of the `-stats` counters (`counters`).
+pub(super) const COUNTERS_BINDING: usize = 15;
+
+/// The `@binding`s of the samples of a tile and of their parameters (per slot, like the
+/// output).
+pub(super) const SAMPLES_BINDING: usize = 16;
+pub(super) const SAMPLING_BINDING: usize = 17;
 
 /// A set of the kernel's bindings (bit k: `@binding(k)`) and its layouts.
 #[derive(Clone)]

@@ -8,7 +8,7 @@
 
 use super::binning::{self, Bins};
 use super::layout::*;
-use super::{Acceleration, GpuOptions};
+use super::options::{Acceleration, GpuOptions};
 use crate::bvh::{Aabb, Bvh, BvhNode};
 use crate::camera::PrimaryRays;
 use crate::clock::Instant;
@@ -31,7 +31,7 @@ pub struct SceneBuffers {
     pub textures: Vec<GpuTexture>,
     pub lights: Vec<GpuLight>,
     /// The hierarchy over spheres, ellipsoids and triangles, when the scene has enough of
-    /// them to profit ([`BVH_MIN_PRIMITIVES`]).
+    /// them to profit ([`super::options::BVH_MIN_PRIMITIVES`]).
     pub bvh: Option<GpuBvh>,
     /// Screen-space bins of the finite primitives, when the frame walks those instead.
     pub bins: Option<Bins>,
@@ -41,12 +41,6 @@ pub struct SceneBuffers {
     sphere_bounds: Vec<Aabb>,
     ellipsoid_bounds: Vec<Aabb>,
 }
-
-/// Below this many finite primitives the flat loops beat the hierarchy. Kernel ms at 200²
-/// on lavapipe, hierarchy against flat (`raycaster bench --only scene2` with the threshold
-/// at 1 and at ∞): 1 sphere 2.5 / 0.56, 6 primitives 2.8 / 1.2, 12 (the cube) 1.65 / 2.05,
-/// 24: 2.4 / 3.6, 48: 2.8 / 6.6, bunny_1k 4.1 / 127.
-pub const BVH_MIN_PRIMITIVES: usize = 8;
 
 /// Below this many pixels `auto` walks samples (`-random_samples` and the like) through the
 /// hierarchy: there the bins' packets of samples lost to it (rendering at 200², 5 interleaved
@@ -110,7 +104,7 @@ impl SceneBuffers {
         buffers.materials = scene.materials.iter().map(GpuMaterial::new).collect();
         if scene.has_textures() {
             buffers.textures = (0..scene.materials.len() as u32)
-                .map(|k| GpuTexture::new(scene.texture(k), rays.center, super::tree::branching(scene, k) > 0))
+                .map(|k| GpuTexture::new(scene.texture(k), rays.center, super::ray_tree::branching(scene, k) > 0))
                 .collect();
         }
         buffers.lights = scene.lights.iter().map(|light| GpuLight::new(light, rays.center)).collect();

@@ -1,39 +1,40 @@
-//! A value handed from a callback to the task that awaits it: wgpu reports a buffer map
-//! through a callback, which a browser runs from its event loop, so the renderer awaits it
-//! there rather than block ([`super::PreparedScene::render_async`]). A future of our own,
-//! a dozen lines, rather than an executor crate's channel.
+//! A one-shot future: a value sent once from a callback to the task that awaits it. wgpu
+//! reports a buffer map through a callback, which a browser runs from its event loop, so
+//! the renderer awaits it there rather than block ([`super::PreparedScene::render_async`]).
+//! A future of our own, a dozen lines, rather than an executor crate's channel.
 
 use std::future::Future;
 use std::pin::Pin;
 use std::sync::{Arc, Mutex};
 use std::task::{Context, Poll, Waker};
 
-/// The receiving end; a clone is the sending end, which [`Handoff::send`] consumes.
-pub(super) struct Handoff<T>(Arc<Mutex<Slot<T>>>);
+/// The receiving end; a clone is the sending end, which [`OneShot::send`] consumes.
+pub(super) struct OneShot<T>(Arc<Mutex<State<T>>>);
 
-struct Slot<T> {
+/// The value once sent, and the task to wake then.
+struct State<T> {
     value: Option<T>,
     waker: Option<Waker>,
 }
 
-impl<T> Default for Handoff<T> {
+impl<T> Default for OneShot<T> {
     fn default() -> Self {
-        Handoff(Arc::new(Mutex::new(Slot { value: None, waker: None })))
+        OneShot(Arc::new(Mutex::new(State { value: None, waker: None })))
     }
 }
 
-impl<T> Clone for Handoff<T> {
+impl<T> Clone for OneShot<T> {
     fn clone(&self) -> Self {
-        Handoff(Arc::clone(&self.0))
+        OneShot(Arc::clone(&self.0))
     }
 }
 
-impl<T> Handoff<T> {
+impl<T> OneShot<T> {
     pub fn send(self, value: T) {
         let waker = {
-            let mut slot = self.0.lock().unwrap_or_else(|e| e.into_inner());
-            slot.value = Some(value);
-            slot.waker.take()
+            let mut state = self.0.lock().unwrap_or_else(|e| e.into_inner());
+            state.value = Some(value);
+            state.waker.take()
         };
         if let Some(waker) = waker {
             waker.wake();
@@ -41,15 +42,15 @@ impl<T> Handoff<T> {
     }
 }
 
-impl<T> Future for Handoff<T> {
+impl<T> Future for OneShot<T> {
     type Output = T;
 
     fn poll(self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<T> {
-        let mut slot = self.0.lock().unwrap_or_else(|e| e.into_inner());
-        match slot.value.take() {
+        let mut state = self.0.lock().unwrap_or_else(|e| e.into_inner());
+        match state.value.take() {
             Some(value) => Poll::Ready(value),
             None => {
-                slot.waker = Some(cx.waker().clone());
+                state.waker = Some(cx.waker().clone());
                 Poll::Pending
             }
         }

@@ -1,6 +1,6 @@
 //! The ray tree's shape, worked out on the host before the kernel is chosen: how deep the
 //! kernel's tree (`shaders/tree.wgsl`) can go for this scene and these flags, and whether
-//! the kernel's stack holds it. A tree that does not fit is refused ([`super::support`]),
+//! the kernel's stack holds it. A tree that does not fit is refused ([`super::unsupported`]),
 //! so `auto` renders it with the reference rather than cut it short.
 
 use crate::render::Shading;

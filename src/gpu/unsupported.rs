@@ -3,8 +3,8 @@
 //! left out (docs/SPEC.md §6). It shades all of docs/SPEC.md §5 (Phong, point lights,
 //! shadows, reflection and refraction, solid textures, whose materials each spawn their
 //! own rays); what it refuses is a ray tree larger than its stack holds
-//! ([`TREE_STACK`](super::tree::TREE_STACK) slots: 15 bounces that a path's weight can
-//! still reach, fewer where a texture blends several mirrors or glasses, [`super::tree`]).
+//! ([`TREE_STACK`](super::ray_tree::TREE_STACK) slots: 15 bounces that a path's weight can
+//! still reach, fewer where a texture blends several mirrors or glasses, [`super::ray_tree`]).
 //! A driver that cuts long loops short (lavapipe, docs/lavapipe.md) is no reason to refuse:
 //! the kernel marks the pixels it cut, and the reference renders them
 //! ([`super::PreparedScene`]).
@@ -16,7 +16,7 @@
 //! The flags that shape only the course's OpenGL preview (`-gui`, `-tessellation`,
 //! `-gouraud`) change no pixel of the files, so the kernel honours them by ignoring them.
 
-use super::tree::TreeShape;
+use super::ray_tree::TreeShape;
 use crate::render::RenderOptions;
 use crate::scene::{Location, Scene};
 use std::fmt;
