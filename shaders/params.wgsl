@@ -239,33 +239,10 @@ struct BvhNode {
     count: u32,
 }
 
-@group(0) @binding(0) var<storage, read> params: Params;
+// The bindings (params, the primitives, pixels, the hierarchy, the bins, textures,
+// counters, samples) are declared by the host, from its table (gpu::bindings), before the
+// files of shaders/.
+
 // The parameters, loaded once per invocation: lavapipe does not know that an address is the
 // same for every lane, so each read of the storage buffer would be a gather of its own.
 var<private> P: Params;
-@group(0) @binding(1) var<storage, read> spheres: array<Sphere>;
-@group(0) @binding(2) var<storage, read> ellipsoids: array<Ellipsoid>;
-@group(0) @binding(3) var<storage, read> planes: array<Plane>;
-@group(0) @binding(4) var<storage, read> triangles: array<Triangle>;
-@group(0) @binding(5) var<storage, read> materials: array<Material>;
-@group(0) @binding(6) var<storage, read> lights: array<Light>;
-// PIXEL_WORDS words per pixel of the tile, f32 values as their bits.
-@group(0) @binding(7) var<storage, read_write> pixels: array<u32>;
-@group(0) @binding(8) var<storage, read> nodes: array<BvhNode>;
-// References (kind << REF_KIND_SHIFT | index into that kind's array), in leaf order.
-@group(0) @binding(9) var<storage, read> prim_refs: array<u32>;
-@group(0) @binding(10) var<storage, read> eye_triangles: array<EyeTriangle>;
-// Per bin (BIN_COLUMNS × BIN_ROWS pixels, row by row from P.first_bin_row, the band of bin
-// rows the dispatch traces): first item and count.
-@group(0) @binding(11) var<storage, read> bin_ranges: array<vec2<u32>>;
-@group(0) @binding(12) var<storage, read> bin_items: array<BinItem>;
-// One per material where TEXTURES (a single zero entry otherwise).
-@group(0) @binding(13) var<storage, read> textures: array<Texture>;
-// Perlin's permutation (256 entries) where TEXTURES (a single zero otherwise).
-@group(0) @binding(14) var<storage, read> permutation: array<u32>;
-// The -stats counts (shaders/stats.wgsl), where STATS; never touched otherwise.
-@group(0) @binding(15) var<storage, read_write> counters: array<atomic<u32>>;
-// A tile's samples, SAMPLE_WORDS words each, and their parameters (shaders/sampling.wgsl),
-// where the render samples (docs/SPEC.md §8); a single zero otherwise.
-@group(0) @binding(16) var<storage, read_write> samples: array<u32>;
-@group(0) @binding(17) var<storage, read> sampling: Sampling;

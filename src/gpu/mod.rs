@@ -46,7 +46,7 @@ mod upload;
 pub mod voxels;
 mod workgroup;
 
-pub use bindings::{Binding, BINDINGS};
+pub use bindings::Binding;
 pub use error::GpuError;
 pub use kernel::{KernelConfig, Stage};
 pub use options::{Acceleration, GpuOptions, MAX_TILE_BYTES};

@@ -127,7 +127,7 @@ impl<'a> PreparedScene<'a> {
         let slots: Vec<TileSlot> =
             slot_buffers.into_iter().map(|b| TileSlot::new(gpu, b, &bindings, &inputs, &counters.buffer)).collect();
         let band_buffer_bytes: u64 = band_bytes.map_or(0, |(r, i)| r + i) * slots.len() as u64;
-        let scene_bytes = inputs.iter().flatten().map(|b| b.size()).sum::<u64>() + band_buffer_bytes;
+        let scene_bytes = inputs.0.iter().flatten().map(|b| b.size()).sum::<u64>() + band_buffer_bytes;
         let acceleration_build_ms = buffers
             .bvh
             .as_ref()

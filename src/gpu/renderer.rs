@@ -1,7 +1,7 @@
 //! The renderer: a wgpu device opened as the kernel needs it, what the adapter allows, and
 //! the kernels compiled on it (cached by their configuration and bindings).
 
-use super::bindings::{self, BindingSet, BINDINGS};
+use super::bindings::{self, Binding, BindingSet};
 use super::error::GpuError;
 use super::kernel::{KernelConfig, Stage};
 use super::options::GpuOptions;
@@ -114,7 +114,7 @@ impl GpuRenderer {
         queue: wgpu::Queue,
         options: GpuOptions,
     ) -> GpuRenderer {
-        let all = device.limits().max_storage_buffers_per_shader_stage >= BINDINGS.len() as u32;
+        let all = device.limits().max_storage_buffers_per_shader_stage >= Binding::ALL.len() as u32;
         let all_bindings = all.then(|| BindingSet::new(&device, BindingSet::ALL));
         GpuRenderer {
             limits: device.limits(),

@@ -11,7 +11,8 @@ use std::sync::OnceLock;
 /// ray outwards, then the searches that use it, then what is done with the nearest hit,
 /// and the entry points last.
 ///
-/// - `params.wgsl`: `override` switches, the structs shared with the host, the bindings;
+/// - `params.wgsl`: `override` switches, the structs shared with the host (the bindings'
+///   declarations are generated, [`super::bindings`]);
 /// - `stats.wgsl`: the `-stats` counters, compiled in only where asked for;
 /// - `exact.wgsl`: products whose rounding no driver chooses, for the signs that decide hits;
 /// - `ray.wgsl`, `camera.wgsl`: the ray, its interval, primary rays;
@@ -98,12 +99,14 @@ pub fn host_constants() -> String {
     out
 }
 
-/// The composed kernel: [`host_constants`], then [`FILES`] in order, each introduced by a
+/// The composed kernel: [`host_constants`], the bindings' declarations
+/// ([`super::bindings::wgsl_declarations`]), then [`FILES`] in order, each introduced by a
 /// comment naming it.
 pub fn source() -> &'static str {
     static SOURCE: OnceLock<String> = OnceLock::new();
     SOURCE.get_or_init(|| {
         let mut out = host_constants();
+        out.push_str(&super::bindings::wgsl_declarations());
         for (name, text) in FILES {
             let _ = write!(out, "\n// ---- shaders/{name} ----\n{text}");
         }
@@ -153,6 +156,15 @@ mod tests {
             assert_eq!(source().matches(&format!("// ---- shaders/{name} ----\n")).count(), 1, "{name}");
         }
         assert!(source().starts_with(&host_constants()));
+    }
+
+    /// The bindings are declared once, from the host's table: a declaration written by hand
+    /// in `shaders/` could disagree with it.
+    #[test]
+    fn no_shader_file_declares_a_binding() {
+        for (name, text) in FILES {
+            assert!(!text.contains("@binding("), "{name} declares a binding; add it to gpu::Binding instead");
+        }
     }
 
     #[test]

@@ -1,16 +1,14 @@
 //! How a render is cut into tiles of rows, and the buffers of a tile in flight: its
 //! parameters, output, samples and band of the bins' lists, bound with the scene's inputs.
 
-use super::bindings::{
-    BindingSet, BINDINGS, BIN_ITEMS_BINDING, BIN_RANGES_BINDING, COUNTERS_BINDING, OUTPUT_BINDING, SAMPLES_BINDING,
-    SAMPLING_BINDING,
-};
+use super::bindings::{Binding, BindingSet};
 use super::binning::{Band, Bins, BIN_ROWS};
 use super::error::GpuError;
 use super::layout::{BinItem, GpuSampling, Params, PixelLayout, SAMPLE_WORDS};
 use super::readback::Timer;
 use super::renderer::GpuRenderer;
 use super::unsupported::UnsupportedError;
+use super::upload::Inputs;
 use super::workgroup::{BIN_PACKET, WORKGROUP};
 use crate::render::RenderOptions;
 use crate::scene::Scene;
@@ -201,24 +199,24 @@ impl TileSlot {
         gpu: &GpuRenderer,
         buffers: TileBuffers,
         bindings: &BindingSet,
-        inputs: &[Option<wgpu::Buffer>; BINDINGS.len()],
+        inputs: &Inputs,
         counters: &wgpu::Buffer,
     ) -> TileSlot {
         let b = &buffers;
-        let entries: Vec<_> = (0..BINDINGS.len())
-            .filter(|&k| bindings.contains(k))
-            .map(|k| {
-                let resource = match k {
-                    0 => &b.params,
-                    OUTPUT_BINDING => &b.output,
-                    COUNTERS_BINDING => counters,
-                    SAMPLES_BINDING => &b.samples,
-                    SAMPLING_BINDING => &b.sampling,
-                    BIN_RANGES_BINDING if b.bins.is_some() => &b.bins.as_ref().expect("checked").ranges,
-                    BIN_ITEMS_BINDING if b.bins.is_some() => &b.bins.as_ref().expect("checked").items,
-                    _ => inputs[k].as_ref().expect("every input binding is uploaded"),
+        let entries: Vec<_> = bindings
+            .bindings()
+            .map(|binding| {
+                let resource = match (binding, &b.bins) {
+                    (Binding::Params, _) => &b.params,
+                    (Binding::Pixels, _) => &b.output,
+                    (Binding::Counters, _) => counters,
+                    (Binding::Samples, _) => &b.samples,
+                    (Binding::Sampling, _) => &b.sampling,
+                    (Binding::BinRanges, Some(band)) => &band.ranges,
+                    (Binding::BinItems, Some(band)) => &band.items,
+                    _ => inputs[binding].as_ref().expect("every input binding is uploaded"),
                 };
-                wgpu::BindGroupEntry { binding: k as u32, resource: resource.as_entire_binding() }
+                wgpu::BindGroupEntry { binding: binding.index(), resource: resource.as_entire_binding() }
             })
             .collect();
         let bind_group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
