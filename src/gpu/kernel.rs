@@ -5,7 +5,7 @@ use super::binning;
 use super::flatten::SceneBuffers;
 use super::layout::PixelLayout;
 use super::options::Acceleration;
-use super::ray_tree::TreeShape;
+use super::ray_tree::RenderRays;
 use super::workgroup::BIN_PACKET;
 use super::{fuse, shader, specialise};
 use crate::render::{Output, RenderOptions, SphereTest, TriangleTest};
@@ -32,9 +32,9 @@ pub struct KernelConfig {
     pub specular_fix: bool,
     /// Some light is a point light.
     pub point_lights: bool,
-    /// Shadow rays (`-shadows` in a scene with lights).
+    /// Shadow rays ([`RenderRays::shadows`]).
     pub shadows: bool,
-    /// The ray tree's depth ([`TreeShape::depth`]).
+    /// The ray tree's depth ([`TreeShape::depth`](super::ray_tree::TreeShape::depth)).
     pub bounces: u32,
     /// Check every pixel for loops the driver cut short ([`GpuRenderer::loop_limit`](super::GpuRenderer::loop_limit)).
     pub loop_canary: bool,
@@ -70,7 +70,7 @@ pub enum Stage {
 }
 
 impl KernelConfig {
-    /// The kernel for `buffers`, flattened from a scene whose ray tree is `tree`, that finds
+    /// The kernel for `buffers`, flattened from a scene that traces `rays`, that finds
     /// candidates by `acceleration` (never `Auto`: what the buffers hold, or will), on a
     /// driver with (`loop_limit`) or without a loop limit, whose subgroups can share a bin's
     /// loads (`shared_loads`, [`GpuRenderer::shares_bin_loads`](super::GpuRenderer::shares_bin_loads)) or not.
@@ -79,7 +79,7 @@ impl KernelConfig {
         acceleration: Acceleration,
         pixel_layout: PixelLayout,
         options: &RenderOptions,
-        tree: &TreeShape,
+        rays: &RenderRays,
         loop_limit: bool,
         shared_loads: bool,
     ) -> KernelConfig {
@@ -98,8 +98,8 @@ impl KernelConfig {
             specular,
             specular_fix: specular && shading.specular_fix,
             point_lights: buffers.lights.iter().any(|l| l.is_point != 0),
-            shadows: shading.shadows && !options.visualize_grid && !buffers.lights.is_empty(),
-            bounces: tree.depth,
+            shadows: rays.shadows,
+            bounces: rays.tree.depth,
             loop_canary: false,
             triangle_test: options.triangle_test,
             sphere_test: options.sphere_test,

@@ -54,11 +54,10 @@ impl<'a> PreparedScene<'a> {
     ) -> Result<PreparedScene<'a>, GpuError> {
         let start = crate::clock::Instant::now();
         // Refused before any tile is handed out: `auto` then renders with the reference.
-        let tree = unsupported::check(scene, options).map_err(GpuError::Unsupported)?;
+        let traced = unsupported::check(scene, options).map_err(GpuError::Unsupported)?;
         precision::check(scene, options).map_err(GpuError::Precision)?;
         let rays = crate::camera::PrimaryRays::for_camera(&scene.camera, options.width, options.height);
-        let secondary_rays =
-            tree.depth > 0 || (options.shading.shadows && !options.visualize_grid && !scene.lights.is_empty());
+        let secondary_rays = traced.secondary();
         let grid = options.grid.map(|size| match options.visualize_grid {
             true => GridChoice::Given(voxels::voxel_grid(scene, size, rays.center)),
             false => GridChoice::Walk(size),
@@ -73,7 +72,7 @@ impl<'a> PreparedScene<'a> {
         }
         let config_for = |buffers: &SceneBuffers, acceleration| {
             let (loop_limit, shared_loads) = (gpu.loop_limit().is_some(), gpu.shares_bin_loads());
-            KernelConfig::new(buffers, acceleration, layout, options, &tree, loop_limit, shared_loads)
+            KernelConfig::new(buffers, acceleration, layout, options, &traced, loop_limit, shared_loads)
         };
         // The kernel is compiled (on lavapipe a cost worth hiding even from the shader cache,
         // docs/performance.md) while this thread builds the

@@ -16,7 +16,7 @@
 //! The flags that shape only the course's OpenGL preview (`-gui`, `-tessellation`,
 //! `-gouraud`) change no pixel of the files, so the kernel honours them by ignoring them.
 
-use super::ray_tree::TreeShape;
+use super::ray_tree::RenderRays;
 use crate::render::RenderOptions;
 use crate::scene::{Location, Scene};
 use std::fmt;
@@ -41,15 +41,11 @@ impl fmt::Display for UnsupportedError {
 
 impl std::error::Error for UnsupportedError {}
 
-/// The shape of the kernel's ray tree for `scene` at `options`, or why its stack cannot
-/// hold it.
-pub fn check(scene: &Scene, options: &RenderOptions) -> Result<TreeShape, UnsupportedError> {
-    if options.visualize_grid {
-        // The voxel picture traces primary rays only and shades cells, never a material.
-        let primary = crate::render::Shading { bounces: 0, shadows: false, ..options.shading };
-        return Ok(TreeShape::new(scene, &primary));
-    }
-    let shape = TreeShape::new(scene, &options.shading);
+/// The rays a render of `scene` at `options` traces, or why the kernel's stack cannot hold
+/// its ray tree.
+pub fn check(scene: &Scene, options: &RenderOptions) -> Result<RenderRays, UnsupportedError> {
+    let rays = RenderRays::new(scene, options);
+    let shape = rays.tree;
     if !shape.fits_stack() {
         return Err(UnsupportedError {
             file: scene.path.clone(),
@@ -68,5 +64,5 @@ pub fn check(scene: &Scene, options: &RenderOptions) -> Result<TreeShape, Unsupp
             ),
         });
     }
-    Ok(shape)
+    Ok(rays)
 }
