@@ -43,9 +43,8 @@ pub struct SceneBuffers {
 }
 
 /// Below this many pixels `auto` walks samples (`-random_samples` and the like) through the
-/// hierarchy: there the bins' packets of samples lost to it (rendering at 200², 5 interleaved
-/// runs: scene7_03 with 4 jittered samples 241 against 224 ms, scene7_04 with 9, 8333 against
-/// 8178 ms), while at 512² they win (bunny_40k, 4 samples: 723 against 1221 ms of kernel).
+/// hierarchy: there the bins' packets of samples lost to it, while at 512² they win
+/// (docs/performance.md).
 /// One ray a pixel takes bins at every size.
 pub const SAMPLED_BINS_MIN_PIXELS: u64 = 1 << 18;
 
@@ -238,18 +237,10 @@ impl SceneBuffers {
             return None;
         }
         // `auto` tries bins at every size for one ray a pixel: their kernel, without loops
-        // over its rays, compiles faster than the hierarchy's (cold shader cache, 200²:
-        // bunny_1k 86 against 193 ms of rendering), and building bins costs less than building
-        // the hierarchy (bunny_40k at 16²: 2.2 against 13.8 ms), so even a 16² image is
-        // quicker with them (35.0 against 42.3 ms of rendering). Samples take bins from
-        // SAMPLED_BINS_MIN_PIXELS on. Long lists still go to the hierarchy, below.
-        // `auto` tries bins at every size for one ray a pixel: their kernel, without loops
-        // over its rays, compiles faster than the hierarchy's (cold shader cache, 200²:
-        // bunny_1k 86 against 193 ms of rendering), and building bins costs less than building
-        // the hierarchy (bunny_40k at 16²: 2.2 against 13.8 ms), so even a 16² image is
-        // quicker with them (35.0 against 42.3 ms of rendering). Samples take bins from
-        // SAMPLED_BINS_MIN_PIXELS on. Long lists still go to the hierarchy
-        // (choose_acceleration).
+        // over its rays, compiles faster than the hierarchy's, and building bins costs less
+        // than building the hierarchy, so even a 16² image is quicker with them
+        // (docs/performance.md). Samples take bins from SAMPLED_BINS_MIN_PIXELS on. Long
+        // lists still go to the hierarchy (choose_acceleration).
         let pixels = rays.width as u64 * rays.height as u64;
         Some(options.acceleration == Acceleration::Bins || (auto && (!sampled || pixels >= SAMPLED_BINS_MIN_PIXELS)))
     }
