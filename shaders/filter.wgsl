@@ -1,4 +1,4 @@
-// uses: params, exact, sampling
+// uses: host, exact, sampling
 // Filters (docs/SPEC.md §8): each output pixel the weighted average of the samples of the
 // pixels within the support radius, cropped at the image's border, as
 // raycaster::cpu::Reference does it. Reached only from `main_filter` (shaders/entry.wgsl).

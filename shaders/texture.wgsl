@@ -1,4 +1,4 @@
-// uses: params, exact
+// uses: host, params, exact
 // Solid textures (docs/SPEC.md §5, GRAMMAR.md A6), in f32 where the host's precision check
 // (gpu::precision, "textures") found the texture coordinates small enough: the share of a
 // texture's first material at a texture-space point, and Perlin's improved noise (Perlin

@@ -3,7 +3,7 @@
 // still to trace wait on an explicit stack, depth first. A node pushes its children
 // (reflected and refracted, for each material a solid texture blends) one level deeper and
 // the last pushed is traced next, so at most all but one of a node's children wait per
-// level: the host keeps that within TREE_STACK (gpu::tree::TreeShape::slots). The colour is linear in what each ray sees, so each ray adds its
+// level: the host keeps that within TREE_STACK (gpu::ray_tree::TreeShape::slots). The colour is linear in what each ray sees, so each ray adds its
 // own shading times the product of the colours on its way from the camera, in whatever
 // order the stack hands it out.
 

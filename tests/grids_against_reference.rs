@@ -3,7 +3,7 @@
 //! inside copies of the folders, on the f64 reference and on the GPU. The GPU's image is held
 //! to the 0.1 % contract against the reference's wherever the kernel renders the scene; where
 //! it refuses (exit 1, one located line on stderr, no image), its reason must be one the
-//! kernel states (src/gpu/support.rs, src/gpu/texture_range.rs); no textured line is
+//! kernel states (src/gpu/unsupported.rs, src/gpu/texture_range.rs); no textured line is
 //! refused. The `-visualize_grid` lines are compared like the others: both backends draw the
 //! course's occupancy (docs/SPEC.md §7). The reference's images are compared with the course's where `expected/` holds
 //! one: `output6_15` within the contract; `output6_16`, `output5_12` and `output6_18b` only

@@ -2,7 +2,7 @@
 
 use crate::app::args::BackendChoice;
 use raycaster::cpu::Reference;
-use raycaster::gpu::tree::TreeShape;
+use raycaster::gpu::ray_tree::RenderRays;
 use raycaster::gpu::{GpuError, GpuRenderer, RenderStats};
 use raycaster::image_io;
 use raycaster::render::{row_tiles, Frame, Output, RenderOptions};
@@ -16,7 +16,7 @@ const CPU_TILE_PIXELS: u32 = 1 << 18;
 pub enum Backend {
     /// The GPU kernel; with `fallback` (`--backend auto`), scenes its f32 kernel cannot
     /// render faithfully ([`raycaster::gpu::precision`]) or does not shade yet
-    /// ([`raycaster::gpu::support`]) go to the CPU reference instead.
+    /// ([`raycaster::gpu::unsupported`]) go to the CPU reference instead.
     Gpu(Box<GpuRenderer>, Fallback),
     Cpu,
 }
@@ -249,9 +249,7 @@ pub const CPU_DEVICE_TREE_PRIMITIVES: usize = 128;
 /// pixels a side (scene6_07 at 1000²: 5.1 s against 8.7 s).
 pub fn reference_traces_quicker(gpu: &GpuRenderer, scene: &Scene, options: &RenderOptions) -> Option<&'static str> {
     let cpu_device = gpu.adapter_info().device_type == wgpu::DeviceType::Cpu;
-    let shading = &options.shading;
-    let secondary_rays = shading.shadows || TreeShape::new(scene, shading).depth > 0;
-    if !cpu_device || !secondary_rays {
+    if !cpu_device || !RenderRays::new(scene, options).secondary() {
         None
     } else if scene.primitive_counts().total() <= CPU_DEVICE_TREE_PRIMITIVES {
         Some("auto: ray trees of a scene this small are quicker here than on a CPU Vulkan device")

@@ -21,12 +21,11 @@ use glam::{DVec3, Vec3};
 
 /// Pixel columns of a bin: the kernel's workgroup is as wide, so that the lanes of a subgroup
 /// on lavapipe (8 neighbouring invocations of a workgroup row) walk one list.
-pub const BIN_COLUMNS: u32 = super::WORKGROUP;
+pub const BIN_COLUMNS: u32 = super::workgroup::WORKGROUP;
 /// Pixel rows of a bin: a packet's, so that its list holds only what the packet's rays may
 /// meet. With bins of 8 rows a packet walked the other half's items too, skipping them one
-/// by one: bunny_40k's kernel took 29.3 ms at 512² and 87.1 ms at 1024² (medians of 15
-/// and 9 interleaved runs), against 26.0 and 76.6 ms with bins of 4 rows.
-pub const BIN_ROWS: u32 = super::BIN_PACKET;
+/// by one, and the kernel was slower (docs/performance.md).
+pub const BIN_ROWS: u32 = super::workgroup::BIN_PACKET;
 
 /// The kernel's rounding error, in pixels, per unit of the scene's resolution R
 /// ([`PrimaryRays::resolution`]), padded for the bins. A primary ray's direction (or

@@ -5,6 +5,7 @@
 //! kernel's own declarations by naga's reflection (the element type of each binding's
 //! array, or its struct), so a field added to a struct is checked without a list to keep.
 
+use super::bindings::Binding;
 use naga::{Module, Scalar, TypeInner};
 use std::collections::HashMap;
 use std::sync::OnceLock;
@@ -57,8 +58,8 @@ fn float_offsets(module: &Module, ty: naga::Handle<naga::Type>, offset: usize, o
 
 /// The first f32 of `bytes`, the contents of binding `binding`, that is NaN or infinite:
 /// which element and which byte of it, and the value.
-pub fn first_non_finite(binding: u32, bytes: &[u8]) -> Option<(usize, usize, f32)> {
-    let layout = layouts().get(&binding)?;
+pub fn first_non_finite(binding: Binding, bytes: &[u8]) -> Option<(usize, usize, f32)> {
+    let layout = layouts().get(&binding.index())?;
     bytes.chunks_exact(layout.stride.max(4)).enumerate().find_map(|(k, element)| {
         layout.floats.iter().find_map(|&at| {
             let value = f32::from_le_bytes(element[at..at + 4].try_into().expect("four bytes"));
@@ -68,8 +69,8 @@ pub fn first_non_finite(binding: u32, bytes: &[u8]) -> Option<(usize, usize, f32
 }
 
 /// How many f32 values one element of `binding` holds (for the tests).
-pub fn floats_per_element(binding: u32) -> usize {
-    layouts().get(&binding).map_or(0, |l| l.floats.len())
+pub fn floats_per_element(binding: Binding) -> usize {
+    layouts().get(&binding.index()).map_or(0, |l| l.floats.len())
 }
 
 #[cfg(test)]
@@ -80,9 +81,9 @@ mod tests {
     #[test]
     fn reflection_finds_every_float_of_a_triangle_and_of_the_parameters() {
         // v0, v1, v2 (3 each) and the two octahedral coordinates; material is a u32.
-        assert_eq!(floats_per_element(4), 11);
+        assert_eq!(floats_per_element(Binding::Triangles), 11);
         // direction, horizontal, up, background, ambient, grid_min, grid_cell, weight.
-        assert_eq!(floats_per_element(0), 3 * 7 + 1);
+        assert_eq!(floats_per_element(Binding::Params), 3 * 7 + 1);
     }
 
     #[test]
@@ -90,13 +91,13 @@ mod tests {
         let mut triangles = [GpuTriangle::default(); 3];
         // A material index whose bits read as NaN is an index, not a float.
         triangles[0].material = 0x7fc0_0000;
-        assert_eq!(first_non_finite(4, bytemuck::cast_slice(&triangles)), None);
+        assert_eq!(first_non_finite(Binding::Triangles, bytemuck::cast_slice(&triangles)), None);
         triangles[2].normal_v = f32::NAN;
-        let (k, at, v) = first_non_finite(4, bytemuck::cast_slice(&triangles)).unwrap();
+        let (k, at, v) = first_non_finite(Binding::Triangles, bytemuck::cast_slice(&triangles)).unwrap();
         assert_eq!((k, at), (2, 44));
         assert!(v.is_nan());
         let params = Params { weight: f32::INFINITY, ..Params::default() };
-        assert!(first_non_finite(0, bytemuck::bytes_of(&params)).is_some());
+        assert!(first_non_finite(Binding::Params, bytemuck::bytes_of(&params)).is_some());
     }
 
     /// A noise of no octaves never changes its blend: its reach, infinite in f64, is uploaded
@@ -111,6 +112,6 @@ mod tests {
         let rays = crate::camera::PrimaryRays::for_camera(&scene.camera, 8, 8);
         let buffers = crate::gpu::flatten::SceneBuffers::flattened(&scene, &rays);
         assert_eq!(buffers.textures[1].reach, f32::MAX);
-        assert_eq!(first_non_finite(13, bytemuck::cast_slice(&buffers.textures)), None);
+        assert_eq!(first_non_finite(Binding::Textures, bytemuck::cast_slice(&buffers.textures)), None);
     }
 }

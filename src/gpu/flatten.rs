@@ -8,7 +8,7 @@
 
 use super::binning::{self, Bins};
 use super::layout::*;
-use super::{Acceleration, GpuOptions};
+use super::options::{Acceleration, GpuOptions};
 use crate::bvh::{Aabb, Bvh, BvhNode};
 use crate::camera::PrimaryRays;
 use crate::clock::Instant;
@@ -31,7 +31,7 @@ pub struct SceneBuffers {
     pub textures: Vec<GpuTexture>,
     pub lights: Vec<GpuLight>,
     /// The hierarchy over spheres, ellipsoids and triangles, when the scene has enough of
-    /// them to profit ([`BVH_MIN_PRIMITIVES`]).
+    /// them to profit ([`super::options::BVH_MIN_PRIMITIVES`]).
     pub bvh: Option<GpuBvh>,
     /// Screen-space bins of the finite primitives, when the frame walks those instead.
     pub bins: Option<Bins>,
@@ -42,16 +42,9 @@ pub struct SceneBuffers {
     ellipsoid_bounds: Vec<Aabb>,
 }
 
-/// Below this many finite primitives the flat loops beat the hierarchy. Kernel ms at 200²
-/// on lavapipe, hierarchy against flat (`raycaster bench --only scene2` with the threshold
-/// at 1 and at ∞): 1 sphere 2.5 / 0.56, 6 primitives 2.8 / 1.2, 12 (the cube) 1.65 / 2.05,
-/// 24: 2.4 / 3.6, 48: 2.8 / 6.6, bunny_1k 4.1 / 127.
-pub const BVH_MIN_PRIMITIVES: usize = 8;
-
 /// Below this many pixels `auto` walks samples (`-random_samples` and the like) through the
-/// hierarchy: there the bins' packets of samples lost to it (rendering at 200², 5 interleaved
-/// runs: scene7_03 with 4 jittered samples 241 against 224 ms, scene7_04 with 9, 8333 against
-/// 8178 ms), while at 512² they win (bunny_40k, 4 samples: 723 against 1221 ms of kernel).
+/// hierarchy: there the bins' packets of samples lost to it, while at 512² they win
+/// (docs/performance.md).
 /// One ray a pixel takes bins at every size.
 pub const SAMPLED_BINS_MIN_PIXELS: u64 = 1 << 18;
 
@@ -110,7 +103,7 @@ impl SceneBuffers {
         buffers.materials = scene.materials.iter().map(GpuMaterial::new).collect();
         if scene.has_textures() {
             buffers.textures = (0..scene.materials.len() as u32)
-                .map(|k| GpuTexture::new(scene.texture(k), rays.center, super::tree::branching(scene, k) > 0))
+                .map(|k| GpuTexture::new(scene.texture(k), rays.center, super::ray_tree::branching(scene, k) > 0))
                 .collect();
         }
         buffers.lights = scene.lights.iter().map(|light| GpuLight::new(light, rays.center)).collect();
@@ -244,18 +237,10 @@ impl SceneBuffers {
             return None;
         }
         // `auto` tries bins at every size for one ray a pixel: their kernel, without loops
-        // over its rays, compiles faster than the hierarchy's (cold shader cache, 200²:
-        // bunny_1k 86 against 193 ms of rendering), and building bins costs less than building
-        // the hierarchy (bunny_40k at 16²: 2.2 against 13.8 ms), so even a 16² image is
-        // quicker with them (35.0 against 42.3 ms of rendering). Samples take bins from
-        // SAMPLED_BINS_MIN_PIXELS on. Long lists still go to the hierarchy, below.
-        // `auto` tries bins at every size for one ray a pixel: their kernel, without loops
-        // over its rays, compiles faster than the hierarchy's (cold shader cache, 200²:
-        // bunny_1k 86 against 193 ms of rendering), and building bins costs less than building
-        // the hierarchy (bunny_40k at 16²: 2.2 against 13.8 ms), so even a 16² image is
-        // quicker with them (35.0 against 42.3 ms of rendering). Samples take bins from
-        // SAMPLED_BINS_MIN_PIXELS on. Long lists still go to the hierarchy
-        // (choose_acceleration).
+        // over its rays, compiles faster than the hierarchy's, and building bins costs less
+        // than building the hierarchy, so even a 16² image is quicker with them
+        // (docs/performance.md). Samples take bins from SAMPLED_BINS_MIN_PIXELS on. Long
+        // lists still go to the hierarchy (choose_acceleration).
         let pixels = rays.width as u64 * rays.height as u64;
         Some(options.acceleration == Acceleration::Bins || (auto && (!sampled || pixels >= SAMPLED_BINS_MIN_PIXELS)))
     }

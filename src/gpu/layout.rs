@@ -389,8 +389,8 @@ impl PixelLayout {
 
     /// Whether the kernel handed over any pixel of `words` (whole pixels of this layout).
     /// Almost every tile hands over none, so this pass has no branch and the compiler
-    /// vectorises it: bunny_40k's 512² tile took 0.66 ms to scan pixel by pixel with
-    /// [`PixelLayout::handover`].
+    /// vectorises it, where a scan pixel by pixel with [`PixelLayout::handover`] cost a
+    /// noticeable share of a tile (docs/performance.md).
     pub fn hands_over_any(&self, words: &[u32]) -> bool {
         let (cut, beyond) = self.handover_words();
         let marked = |any: bool, &w: &u32| any | (w == cut) | (w == beyond);

@@ -3,8 +3,8 @@
 //! (`if (TEXTURES && …)`, `if (BOUNCES == 0u)`). Handed to wgpu as it is, with the
 //! switches as pipeline constants, every feature's code still reaches the driver behind a
 //! branch that never runs, and lavapipe inlines and optimises all of it before it finds
-//! out: a 64 × 64 sphere spent 1.5 s preparing its kernel, most of it in lavapipe's own
-//! passes (`perf`), which its shader cache does not save.
+//! out: a small render spent most of its time preparing its kernel, in lavapipe's own
+//! passes (`perf`, docs/performance.md), which its shader cache does not save.
 //!
 //! So the host fixes the overrides itself (naga's `process_overrides`), cuts every branch
 //! whose condition has become a known constant, drops the entry point it does not run,

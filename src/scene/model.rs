@@ -181,7 +181,7 @@ impl Default for Background {
 /// §2), with the course parser's defaults for fields a file leaves out
 /// ([`Material::default`]). The reference shades with the diffuse and specular terms
 /// (docs/SPEC.md §5); the GPU kernel with the diffuse term only, and it refuses a scene
-/// whose materials have any other term (`raycaster::gpu::support`).
+/// whose materials have any other term (`raycaster::gpu::unsupported`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Material {
     /// `diffuseColor`, default (1, 1, 1).

@@ -3,8 +3,8 @@
 //! left out (docs/SPEC.md §6). It shades all of docs/SPEC.md §5 (Phong, point lights,
 //! shadows, reflection and refraction, solid textures, whose materials each spawn their
 //! own rays); what it refuses is a ray tree larger than its stack holds
-//! ([`TREE_STACK`](super::tree::TREE_STACK) slots: 15 bounces that a path's weight can
-//! still reach, fewer where a texture blends several mirrors or glasses, [`super::tree`]).
+//! ([`TREE_STACK`](super::ray_tree::TREE_STACK) slots: 15 bounces that a path's weight can
+//! still reach, fewer where a texture blends several mirrors or glasses, [`super::ray_tree`]).
 //! A driver that cuts long loops short (lavapipe, docs/lavapipe.md) is no reason to refuse:
 //! the kernel marks the pixels it cut, and the reference renders them
 //! ([`super::PreparedScene`]).
@@ -16,7 +16,7 @@
 //! The flags that shape only the course's OpenGL preview (`-gui`, `-tessellation`,
 //! `-gouraud`) change no pixel of the files, so the kernel honours them by ignoring them.
 
-use super::tree::TreeShape;
+use super::ray_tree::RenderRays;
 use crate::render::RenderOptions;
 use crate::scene::{Location, Scene};
 use std::fmt;
@@ -41,15 +41,11 @@ impl fmt::Display for UnsupportedError {
 
 impl std::error::Error for UnsupportedError {}
 
-/// The shape of the kernel's ray tree for `scene` at `options`, or why its stack cannot
-/// hold it.
-pub fn check(scene: &Scene, options: &RenderOptions) -> Result<TreeShape, UnsupportedError> {
-    if options.visualize_grid {
-        // The voxel picture traces primary rays only and shades cells, never a material.
-        let primary = crate::render::Shading { bounces: 0, shadows: false, ..options.shading };
-        return Ok(TreeShape::new(scene, &primary));
-    }
-    let shape = TreeShape::new(scene, &options.shading);
+/// The rays a render of `scene` at `options` traces, or why the kernel's stack cannot hold
+/// its ray tree.
+pub fn check(scene: &Scene, options: &RenderOptions) -> Result<RenderRays, UnsupportedError> {
+    let rays = RenderRays::new(scene, options);
+    let shape = rays.tree;
     if !shape.fits_stack() {
         return Err(UnsupportedError {
             file: scene.path.clone(),
@@ -68,5 +64,5 @@ pub fn check(scene: &Scene, options: &RenderOptions) -> Result<TreeShape, Unsupp
             ),
         });
     }
-    Ok(shape)
+    Ok(rays)
 }

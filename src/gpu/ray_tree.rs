@@ -1,9 +1,9 @@
 //! The ray tree's shape, worked out on the host before the kernel is chosen: how deep the
 //! kernel's tree (`shaders/tree.wgsl`) can go for this scene and these flags, and whether
-//! the kernel's stack holds it. A tree that does not fit is refused ([`super::support`]),
+//! the kernel's stack holds it. A tree that does not fit is refused ([`super::unsupported`]),
 //! so `auto` renders it with the reference rather than cut it short.
 
-use crate::render::Shading;
+use crate::render::{RenderOptions, Shading};
 use crate::scene::Scene;
 use glam::DVec3;
 
@@ -13,6 +13,34 @@ use glam::DVec3;
 /// rays. Each slot holds 13 words of private memory per invocation. The course's deepest
 /// tree is 10 (scene4_05 with `-bounces 10`).
 pub const TREE_STACK: u32 = 16;
+
+/// The rays a render traces beyond the primary ones: its ray tree and its shadow rays. The
+/// one rule for "secondary rays", which the kernel's configuration, the choice of how rays
+/// find their candidates and `auto`'s choice of renderer all follow.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RenderRays {
+    pub tree: TreeShape,
+    /// Shadow rays: `-shadows` in a scene with lights.
+    pub shadows: bool,
+}
+
+impl RenderRays {
+    /// The rays a render of `scene` as `options` say traces. The `-visualize_grid` picture
+    /// traces primary rays only and shades cells, never a material.
+    pub fn new(scene: &Scene, options: &RenderOptions) -> RenderRays {
+        if options.visualize_grid {
+            let primary = Shading { bounces: 0, shadows: false, ..options.shading };
+            return RenderRays { tree: TreeShape::new(scene, &primary), shadows: false };
+        }
+        let shadows = options.shading.shadows && !scene.lights.is_empty();
+        RenderRays { tree: TreeShape::new(scene, &options.shading), shadows }
+    }
+
+    /// Whether rays other than primary ones are traced (shadow, reflected, refracted).
+    pub fn secondary(&self) -> bool {
+        self.shadows || self.tree.depth > 0
+    }
+}
 
 /// What the kernel's tree looks like for one scene and one set of shading flags.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -1,0 +1,132 @@
+#!/usr/bin/env python3
+"""The compare-builds check: two raycaster binaries render the same jobs, and every file
+they write must be identical, byte for byte.
+
+    scripts/compare_builds.py BIN_A BIN_B [--course DIR] [--size N] [--work DIR]
+
+The jobs: every line of the course's assignments' commands.txt (a2 .. a7), through
+`raycaster batch commands.txt --backend gpu` and `--backend cpu`, each in a fresh copy of
+its folder; and every scenes/*.txt and scenes/hard/*.txt of this repository, rendered at
+N x N (64 unless told) with -output, -normals and -depth (an .exr, the distance itself)
+on both backends. A scene that does not load is a job too: both builds must refuse it
+alike (the exit codes are compared, not the messages, which may name timings).
+
+A binary's outputs are kept under --work, named by the digest of its bytes, so the
+baseline is rendered once however often the check runs.
+"""
+
+import argparse
+import hashlib
+import json
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+ASSIGNMENTS = ["a2", "a3", "a4", "a5", "a6", "a7"]
+BACKENDS = ["gpu", "cpu"]
+
+
+def digest(path):
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()[:16]
+
+
+def run(command, cwd, log):
+    with open(log, "wb") as out:
+        done = subprocess.run(command, cwd=cwd, stdout=out, stderr=subprocess.STDOUT)
+    return done.returncode
+
+
+def scenes():
+    found = sorted((ROOT / "scenes").glob("*.txt")) + sorted((ROOT / "scenes" / "hard").glob("*.txt"))
+    return [p for p in found if p.name != "README.txt"]
+
+
+def render_all(binary, course, size, out):
+    """Renders every job with `binary` into `out`; returns {job: exit code}."""
+    codes = {}
+    for backend in BACKENDS:
+        for assignment in ASSIGNMENTS:
+            folder = out / backend / assignment
+            shutil.copytree(course / assignment, folder)
+            # Scenes name meshes beside them or in the course's shared folder.
+            if (course / "meshes").is_dir() and not (out / backend / "meshes").exists():
+                shutil.copytree(course / "meshes", out / backend / "meshes")
+            command = [str(binary), "batch", "commands.txt", "--backend", backend]
+            codes[f"{backend}/{assignment}"] = run(command, folder, out / backend / f"{assignment}.log")
+        for scene in scenes():
+            name = scene.relative_to(ROOT / "scenes").with_suffix("").as_posix().replace("/", "__")
+            folder = out / backend / "scenes" / name
+            folder.mkdir(parents=True)
+            command = [str(binary), "-input", str(scene), "-size", str(size), str(size),
+                       "-output", "x.png", "-normals", "n.png", "-depth", "0", "20", "d.exr",
+                       "--backend", backend]
+            codes[f"{backend}/scenes/{name}"] = run(command, folder, folder.parent / f"{name}.log")
+    return codes
+
+
+def outputs(binary, course, size, work):
+    """The folder of `binary`'s outputs, rendered unless an earlier run left them complete."""
+    out = work / f"{digest(binary)}-{size}"
+    done = out / "exit_codes.json"
+    if not done.exists():
+        if out.exists():
+            shutil.rmtree(out)
+        out.mkdir(parents=True)
+        codes = render_all(Path(binary).resolve(), course, size, out)
+        done.write_text(json.dumps(codes, indent=1, sort_keys=True))
+    return out, json.loads(done.read_text())
+
+
+def written_files(root, course):
+    """Every file a job wrote: those under `root` but its logs, its bookkeeping and the
+    copies of the course's own files."""
+    inputs = {p.relative_to(course).as_posix() for p in course.rglob("*") if p.is_file()}
+    found = set()
+    for path in root.rglob("*"):
+        if not path.is_file() or path.suffix == ".log" or path.name == "exit_codes.json":
+            continue
+        relative = path.relative_to(root).as_posix()
+        backend, _, rest = relative.partition("/")
+        if rest in inputs:
+            continue
+        found.add(relative)
+    return found
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("bin_a")
+    parser.add_argument("bin_b")
+    parser.add_argument("--course", type=Path, default=ROOT / ".." / "shared" / "mit6837")
+    parser.add_argument("--size", type=int, default=64)
+    parser.add_argument("--work", type=Path, default=Path("/tmp/compare_builds"))
+    args = parser.parse_args()
+    course = args.course.resolve()
+    if not (course / "a2" / "commands.txt").exists():
+        sys.exit(f"no course at {course} (--course DIR)")
+    (a, codes_a), (b, codes_b) = (outputs(x, course, args.size, args.work) for x in (args.bin_a, args.bin_b))
+    files_a, files_b = written_files(a, course), written_files(b, course)
+    identical, different = 0, []
+    for name in sorted(files_a & files_b):
+        if (a / name).read_bytes() == (b / name).read_bytes():
+            identical += 1
+        else:
+            different.append(name)
+    only_a, only_b = sorted(files_a - files_b), sorted(files_b - files_a)
+    codes_differ = sorted(job for job in codes_a.keys() | codes_b.keys() if codes_a.get(job) != codes_b.get(job))
+    total = len(files_a | files_b)
+    for label, names in [("differ", different), (f"only from {args.bin_a}", only_a),
+                         (f"only from {args.bin_b}", only_b), ("exit codes differ", codes_differ)]:
+        for name in names:
+            print(f"{label}: {name}")
+    failed = sum(1 for code in codes_a.values() if code != 0)
+    print(f"{len(codes_a)} jobs ({failed} refused alike or failed alike)" if not codes_differ
+          else f"{len(codes_differ)} of {len(codes_a)} jobs exit differently")
+    print(f"{identical} of {total} files identical")
+    sys.exit(0 if identical == total and not codes_differ and total > 0 else 1)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,198 @@
+//! The kernel's configuration: the `override` constants a kernel is compiled with, its
+//! entry point, and the specialised module they make.
+
+use super::binning;
+use super::flatten::SceneBuffers;
+use super::layout::PixelLayout;
+use super::options::Acceleration;
+use super::ray_tree::RenderRays;
+use super::workgroup::BIN_PACKET;
+use super::{fuse, shader, specialise};
+use crate::render::{Output, RenderOptions, SphereTest, TriangleTest};
+
+// A packet never straddles two bins (the kernel's `main_bins` relies on it).
+const _: () = assert!(binning::BIN_ROWS.is_multiple_of(BIN_PACKET));
+
+/// The `override` constants a kernel is compiled with: only what the scene and the requested
+/// outputs need is compiled in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct KernelConfig {
+    pub has_spheres: bool,
+    pub has_ellipsoids: bool,
+    pub has_planes: bool,
+    pub has_triangles: bool,
+    pub orthographic: bool,
+    pub pixel_layout: PixelLayout,
+    pub num_lights: u32,
+    /// The scene has one material (loaded once per invocation).
+    pub one_material: bool,
+    pub shade_back: bool,
+    /// Some material has a specular colour.
+    pub specular: bool,
+    pub specular_fix: bool,
+    /// Some light is a point light.
+    pub point_lights: bool,
+    /// Shadow rays ([`RenderRays::shadows`]).
+    pub shadows: bool,
+    /// The ray tree's depth ([`TreeShape::depth`](super::ray_tree::TreeShape::depth)).
+    pub bounces: u32,
+    /// Check every pixel for loops the driver cut short ([`GpuRenderer::loop_limit`](super::GpuRenderer::loop_limit)).
+    pub loop_canary: bool,
+    pub triangle_test: TriangleTest,
+    pub sphere_test: SphereTest,
+    pub use_bvh: bool,
+    pub use_bins: bool,
+    /// With bins, the subgroup's lanes share each item's loads (`main_bins_shared`).
+    pub shared_bin_loads: bool,
+    pub use_grid: bool,
+    /// Some material is a solid texture (`shaders/texture.wgsl`).
+    pub textures: bool,
+    /// `-stats`: count rays, tests and cells (`shaders/stats.wgsl`).
+    pub stats: bool,
+    /// `-visualize_grid`: draw the grid's occupied cells (`shaders/voxels.wgsl`).
+    pub voxels: bool,
+    /// Which of the kernel's passes this pipeline runs.
+    pub stage: Stage,
+}
+
+/// The kernel's passes: one pass for a pixel's centre sample, or, with sampling
+/// (docs/SPEC.md §8), a pass tracing every sample and a pass filtering them.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Stage {
+    /// `main` or `main_bins`: one sample per pixel, at its centre.
+    #[default]
+    Pixels,
+    /// `main_samples`: one invocation per sample; `main_samples_bins`, with bins: a packet of
+    /// a pixel's samples per invocation, walking its bin.
+    Samples,
+    /// `main_filter`: one invocation per output pixel, reading the samples.
+    Filter,
+}
+
+impl KernelConfig {
+    /// The kernel for `buffers`, flattened from a scene that traces `rays`, that finds
+    /// candidates by `acceleration` (never `Auto`: what the buffers hold, or will), on a
+    /// driver with (`loop_limit`) or without a loop limit, whose subgroups can share a bin's
+    /// loads (`shared_loads`, [`GpuRenderer::shares_bin_loads`](super::GpuRenderer::shares_bin_loads)) or not.
+    pub fn new(
+        buffers: &SceneBuffers,
+        acceleration: Acceleration,
+        pixel_layout: PixelLayout,
+        options: &RenderOptions,
+        rays: &RenderRays,
+        loop_limit: bool,
+        shared_loads: bool,
+    ) -> KernelConfig {
+        let shading = &options.shading;
+        let specular = buffers.materials.iter().any(|m| m.specular != [0.0; 3]);
+        let mut config = KernelConfig {
+            has_spheres: !buffers.spheres.is_empty(),
+            has_ellipsoids: !buffers.ellipsoids.is_empty(),
+            has_planes: !buffers.planes.is_empty(),
+            has_triangles: !buffers.triangles.is_empty(),
+            orthographic: buffers.orthographic,
+            pixel_layout,
+            num_lights: buffers.lights.len() as u32,
+            one_material: buffers.materials.len() == 1,
+            shade_back: shading.shade_back,
+            specular,
+            specular_fix: specular && shading.specular_fix,
+            point_lights: buffers.lights.iter().any(|l| l.is_point != 0),
+            shadows: rays.shadows,
+            bounces: rays.tree.depth,
+            loop_canary: false,
+            triangle_test: options.triangle_test,
+            sphere_test: options.sphere_test,
+            use_bvh: acceleration == Acceleration::Hierarchy,
+            use_bins: acceleration == Acceleration::Bins,
+            shared_bin_loads: false,
+            use_grid: acceleration == Acceleration::Grid,
+            textures: !buffers.textures.is_empty(),
+            stats: options.stats,
+            voxels: options.visualize_grid,
+            stage: Stage::Pixels,
+        };
+        // Every pixel, whatever it casts: a hierarchy that cannot cull (slivers across the
+        // view), a crowded bin, a flat loop or a texture's blend passes the limit.
+        config.loop_canary = loop_limit;
+        // The shared walk tests triangles alone, with the watertight test's primary-ray form.
+        let eye_only =
+            !config.has_spheres && !config.has_ellipsoids && config.triangle_test == TriangleTest::Watertight;
+        config.shared_bin_loads = shared_loads && config.use_bins && eye_only;
+        config
+    }
+
+    /// Pixels each invocation renders, stacked in a column (the kernel's `PACKET` in
+    /// `main_bins`): 4 rays share each load from a bin; `main` renders one pixel.
+    pub fn packet(&self) -> u32 {
+        if self.use_bins {
+            BIN_PACKET
+        } else {
+            1
+        }
+    }
+
+    /// The kernel's entry point: `main_bins` renders packets from bins (`main_bins_shared`
+    /// sharing their loads), `main` one pixel.
+    pub fn entry_point(&self) -> &'static str {
+        match self.stage {
+            Stage::Samples if self.use_bins => return "main_samples_bins",
+            Stage::Samples => return "main_samples",
+            Stage::Filter => return "main_filter",
+            Stage::Pixels => {}
+        }
+        match (self.use_bins, self.shared_bin_loads) {
+            (true, true) => "main_bins_shared",
+            (true, false) => "main_bins",
+            (false, _) => "main",
+        }
+    }
+
+    /// Whether rays other than primary ones are traced (shadow, reflected, refracted).
+    pub fn secondary_rays(&self) -> bool {
+        self.shadows || self.bounces > 0
+    }
+
+    /// The values for `PipelineCompilationOptions::constants`.
+    pub fn constants(&self) -> [(&'static str, f64); 27] {
+        let b = |v: bool| if v { 1.0 } else { 0.0 };
+        [
+            ("HAS_SPHERES", b(self.has_spheres)),
+            ("HAS_ELLIPSOIDS", b(self.has_ellipsoids)),
+            ("HAS_PLANES", b(self.has_planes)),
+            ("HAS_TRIANGLES", b(self.has_triangles)),
+            ("ORTHOGRAPHIC", b(self.orthographic)),
+            ("WANT_COLOR", b(self.pixel_layout.outputs.contains(Output::Color))),
+            ("WANT_NORMAL", b(self.pixel_layout.outputs.contains(Output::Normals))),
+            ("WANT_DEPTH", b(self.pixel_layout.outputs.contains(Output::Depth))),
+            ("PIXEL_WORDS", self.pixel_layout.words() as f64),
+            ("PACKED_8BIT", b(self.pixel_layout.packed)),
+            ("NUM_LIGHTS", self.num_lights as f64),
+            ("ONE_MATERIAL", b(self.one_material)),
+            ("SHADE_BACK", b(self.shade_back)),
+            ("SPECULAR", b(self.specular)),
+            ("SPECULAR_FIX", b(self.specular_fix)),
+            ("POINT_LIGHTS", b(self.point_lights)),
+            ("SHADOWS", b(self.shadows)),
+            ("BOUNCES", self.bounces as f64),
+            ("LOOP_CANARY", b(self.loop_canary)),
+            ("TRIANGLE_TEST", self.triangle_test as u32 as f64),
+            ("SPHERE_TEST", self.sphere_test as u32 as f64),
+            ("USE_BVH", b(self.use_bvh)),
+            ("USE_BINS", b(self.use_bins)),
+            ("USE_GRID", b(self.use_grid)),
+            ("TEXTURES", b(self.textures)),
+            ("STATS", b(self.stats)),
+            ("VOXELS", b(self.voxels)),
+        ]
+    }
+
+    /// The kernel itself: the composed WGSL ([`shader`]) with this configuration's constants
+    /// fixed and what they rule out cut away ([`specialise`]).
+    pub(super) fn module(&self) -> naga::Module {
+        if fuse::requested() {
+            return specialise::specialise(&shader::fused_module().0, &self.constants(), self.entry_point());
+        }
+        specialise::specialise(shader::module(), &self.constants(), self.entry_point())
+    }
+}

@@ -1,0 +1,73 @@
+//! How a [`GpuRenderer`](super::GpuRenderer) renders: the choices its caller makes.
+
+/// The output tile of one dispatch. Small tiles stay in the CPU's caches on lavapipe; below
+/// this size the dispatches multiply (docs/performance.md). It also bounds host memory.
+pub const MAX_TILE_BYTES: u64 = 2 << 20;
+
+/// Below this many finite primitives the flat loops beat the hierarchy (lavapipe, at 200²:
+/// docs/performance.md).
+pub const BVH_MIN_PRIMITIVES: usize = 8;
+
+/// How a [`GpuRenderer`](super::GpuRenderer) renders; [`Default`] is what the command line uses.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct GpuOptions {
+    /// Caps the output buffer of one dispatch (or less if the adapter's limits are lower;
+    /// at least one row); taller images render in several tiles.
+    pub max_tile_bytes: u64,
+    /// Scenes with at least this many finite primitives get a hierarchy; `usize::MAX` turns
+    /// it off, 1 forces it on.
+    pub bvh_min_primitives: usize,
+    /// How rays find their candidates.
+    pub acceleration: Acceleration,
+    /// Let the lanes of a bin's row share its loads (`main_bins_shared`) where the device
+    /// allows it ([`GpuRenderer::shares_bin_loads`](super::GpuRenderer::shares_bin_loads));
+    /// false keeps one load per lane (`main_bins`), as on every other adapter, for tests to
+    /// compare the two.
+    pub shared_bin_loads: bool,
+    /// Let the host map the buffers the kernel binds where the device allows it
+    /// ([`GpuRenderer::maps_kernel_buffers`](super::GpuRenderer::maps_kernel_buffers)); false
+    /// copies through staging and readback buffers, as on a discrete GPU, for tests to
+    /// compare the two.
+    pub mapped_buffers: bool,
+}
+
+impl Default for GpuOptions {
+    fn default() -> Self {
+        GpuOptions {
+            max_tile_bytes: MAX_TILE_BYTES,
+            bvh_min_primitives: BVH_MIN_PRIMITIVES,
+            acceleration: Acceleration::Auto,
+            shared_bin_loads: true,
+            mapped_buffers: true,
+        }
+    }
+}
+
+/// How the kernel finds the primitives a ray may hit (planes are always tested directly).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Acceleration {
+    /// Screen-space bins where their lists are short, else the hierarchy from
+    /// [`GpuOptions::bvh_min_primitives`] on, else flat loops.
+    #[default]
+    Auto,
+    /// Screen-space bins ([`super::binning`]).
+    Bins,
+    /// The bounding volume hierarchy ([`crate::bvh`]).
+    Hierarchy,
+    /// Every primitive for every ray.
+    Flat,
+    /// The uniform grid `-grid` asks for (docs/SPEC.md §7); never chosen otherwise.
+    Grid,
+}
+
+impl Acceleration {
+    pub fn name(self) -> &'static str {
+        match self {
+            Acceleration::Auto => "auto",
+            Acceleration::Bins => "bins",
+            Acceleration::Hierarchy => "hierarchy",
+            Acceleration::Flat => "flat",
+            Acceleration::Grid => "grid",
+        }
+    }
+}
