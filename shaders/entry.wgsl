@@ -40,6 +40,15 @@ fn write_row(i: u32, row: i32, shaded: Shaded, cut: bool) {
     write_pixel(u32(row) * P.width + i, shaded.hit, shaded.color, shaded.normal, shaded.t, handover);
 }
 
+// What a primary ray (a pixel's or a sample's) shows: the scene shaded, or with
+// -visualize_grid the grid's occupied cells (voxels.wgsl).
+fn primary_ray_sees(ray: Ray) -> Shaded {
+    if (VOXELS) {
+        return voxel_pixel(ray);
+    }
+    return shade_pixel(ray, closest_hit(ray, t_min()));
+}
+
 @compute @workgroup_size(WORKGROUP, WORKGROUP)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     P = params;
@@ -50,12 +59,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let ray = ray_of_row(i, P.first_row + row);
     load_shading_data();
-    var shaded: Shaded;
-    if (VOXELS) {
-        shaded = voxel_pixel(ray);
-    } else {
-        shaded = shade_pixel(ray, closest_hit(ray, t_min()));
-    }
+    let shaded = primary_ray_sees(ray);
     let cut = LOOP_CANARY && loops_were_cut();
     write_row(i, i32(row), shaded, cut);
     // A pixel cut short is rendered again, and counted, by the reference.
@@ -172,13 +176,7 @@ fn main_samples(@builtin(global_invocation_id) id: vec3<u32>) {
     let j = P.height - 1u - (sampling.first_row + r);
     let ray = sample_ray(i, j, k);
     load_shading_data();
-    // -visualize_grid's picture (grid.wgsl's voxels), sample by sample, as `main` draws it.
-    var shaded: Shaded;
-    if (VOXELS) {
-        shaded = voxel_pixel(ray);
-    } else {
-        shaded = shade_pixel(ray, closest_hit(ray, t_min()));
-    }
+    let shaded = primary_ray_sees(ray);
     let cut = LOOP_CANARY && loops_were_cut();
     write_sample(i, r, k, shaded, cut);
     flush_sample_counts(id, r, cut);

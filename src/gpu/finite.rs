@@ -68,8 +68,9 @@ pub fn first_non_finite(binding: Binding, bytes: &[u8]) -> Option<(usize, usize,
     })
 }
 
-/// How many f32 values one element of `binding` holds (for the tests).
-pub fn floats_per_element(binding: Binding) -> usize {
+/// How many f32 values one element of `binding` holds.
+#[cfg(test)]
+fn floats_per_element(binding: Binding) -> usize {
     layouts().get(&binding.index()).map_or(0, |l| l.floats.len())
 }
 
