@@ -4,6 +4,8 @@
 //! Data flows one way: scene text → [`scene`] (parsed model) → [`gpu`] (flattened buffers and
 //! the WGSL kernel) or [`cpu`] (the reference, which walks the model itself) →
 //! [`render::Frame`] (float buffers) → [`image_io`] (8-bit images, TGA or PNG).
+//! [`renderer::Renderer`] is the one place that chooses between the GPU and the reference
+//! (`--backend gpu`, `cpu` or `auto`), above both and below every user of the library.
 //! [`metrics`] says how far two renders are apart in levels and floats, [`flip`] how visible
 //! the difference between two images is (NVIDIA's ꟻLIP, which `raycaster grade` judges with).
 //! The command line (`src/main.rs`, `src/app/`) is a thin layer over this library.
@@ -36,5 +38,6 @@ pub mod grid;
 pub mod image_io;
 pub mod metrics;
 pub mod render;
+pub mod renderer;
 pub mod sampling;
 pub mod scene;

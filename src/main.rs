@@ -5,10 +5,10 @@ mod app;
 use app::args::{
     BackendChoice, BenchArgs, Command, GalleryArgs, GradeArgs, Habits, RenderArgs, Split, StitchArgs, Verbosity,
 };
-use app::backend::Backend;
 use app::exit::{self, say, Failure};
 use app::job::LineReport;
 use raycaster::render::Outputs;
+use raycaster::renderer::Renderer;
 use raycaster::scene::SceneWarning;
 use std::process::ExitCode;
 
@@ -66,15 +66,12 @@ fn render(args: &RenderArgs, habits: Habits) -> Result<(), Failure> {
         // The scene first: a job small enough is rendered by the reference at once, without
         // paying for the GPU's start-up.
         let (scene, parse_ms) = app::job::load(args)?;
-        let backend = if app::backend::reference_is_quicker(&scene, &app::job::options_for(args)) {
-            Backend::Cpu
-        } else {
-            open_backend(args.backend, habits)?
-        };
+        let (backend, fallback) = Renderer::open_for(args.backend, &scene, &app::job::options_for(args))?;
+        say_fallback(fallback, habits);
         let report = app::job::run_loaded(scene, parse_ms, args, &backend, progress)?;
         (backend, report)
     } else {
-        let backend = open_backend(args.backend, habits)?;
+        let backend = open_renderer(args.backend, habits)?;
         let report = app::job::run(args, &backend, progress)?;
         (backend, report)
     };
@@ -131,7 +128,7 @@ fn compare(args: &RenderArgs, outputs: Outputs, max_diff_pixels: Option<u64>, ha
 
 fn batch(file: &std::path::Path, choice: BackendChoice, shard: Option<Split>, habits: Habits) -> Result<(), Failure> {
     let text = std::fs::read_to_string(file).map_err(|e| Failure::Failed(format!("{}: {e}", file.display())))?;
-    let backend = open_backend(choice, habits)?;
+    let backend = open_renderer(choice, habits)?;
     let located = |line: usize, report: &LineReport| format!("{}:{line}: {report}", file.display());
     // `--verbose`'s time of each line, printed after the batch.
     let mut timings = Vec::new();
@@ -223,7 +220,7 @@ fn bench(args: &BenchArgs, habits: Habits) -> Result<(), Failure> {
 /// `raycaster grade`: the report on stdout (and the page), then the verdict: 1 when any
 /// image fails or is missing.
 fn grade(args: &GradeArgs, habits: Habits) -> Result<(), Failure> {
-    let backend = open_backend(args.backend, habits)?;
+    let backend = open_renderer(args.backend, habits)?;
     let quiet = habits.verbosity == Verbosity::Quiet;
     let graded = app::grade::grade(args, &backend, !quiet).map_err(|e| Failure::Failed(format!("grade: {e}")))?;
     exit::print(&app::grade::report(&graded))?;
@@ -248,7 +245,7 @@ fn grade(args: &GradeArgs, habits: Habits) -> Result<(), Failure> {
 
 /// `raycaster gallery`: the page, and a line saying what it holds.
 fn gallery(args: &GalleryArgs, habits: Habits) -> Result<(), Failure> {
-    let backend = open_backend(args.backend, habits)?;
+    let backend = open_renderer(args.backend, habits)?;
     let quiet = habits.verbosity == Verbosity::Quiet;
     let count = app::gallery::gallery(args, &backend, !quiet).map_err(|e| Failure::Failed(format!("gallery: {e}")))?;
     exit::print(&format!(
@@ -277,12 +274,17 @@ fn write_plot(_: &[app::bench::Row], _: &std::path::Path) -> Result<(), String> 
     Ok(())
 }
 
-fn open_backend(choice: BackendChoice, habits: Habits) -> Result<Backend, Failure> {
-    let (backend, fallback) = Backend::open(choice)?;
+fn open_renderer(choice: BackendChoice, habits: Habits) -> Result<Renderer, Failure> {
+    let (renderer, fallback) = Renderer::open(choice)?;
+    say_fallback(fallback, habits);
+    Ok(renderer)
+}
+
+/// `auto`'s notice that no GPU opened, unless `-q`.
+fn say_fallback(fallback: Option<String>, habits: Habits) {
     if let Some(fallback) = fallback.filter(|_| habits.verbosity != Verbosity::Quiet) {
         say(&fallback);
     }
-    Ok(backend)
 }
 
 /// `raycaster selftest`: the table on stdout; exit 1 where a case is not faithful.

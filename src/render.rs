@@ -145,6 +145,67 @@ impl RayStats {
     }
 }
 
+/// What a render cost: every field the GPU measures; the reference fills `tiles`, `counted`
+/// and `grid_bounds`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct RenderStats {
+    /// Time spent in the kernel, summed over tiles, from GPU timestamp queries; `None`
+    /// where the adapter has none (then only wall time can be measured).
+    pub kernel_ns: Option<u64>,
+    /// Dispatches the image took.
+    pub tiles: u32,
+    /// Time to build the hierarchy or the bins on the CPU, when the scene got one.
+    pub acceleration_build_ms: Option<f64>,
+    /// Pixels whose loops the driver cut short
+    /// ([`GpuRenderer::loop_limit`](crate::gpu::GpuRenderer::loop_limit)), which the reference
+    /// rendered instead.
+    pub pixels_cut_short: u64,
+    /// Pixels where a solid texture was blended beyond its reach
+    /// ([`crate::gpu::texture_range`]), which the reference rendered instead.
+    pub pixels_beyond_reach: u64,
+    /// Time to flatten the scene into buffers (BVH build included) and upload them.
+    pub prepare_ms: f64,
+    /// Bytes of scene data on the device (primitives, materials, lights, hierarchy, and
+    /// the bins: their edge planes and the buffers of the lists of each tile in flight).
+    pub scene_bytes: u64,
+    /// How the kernel found candidates (never `Auto`: what the cost model chose).
+    pub acceleration: Acceleration,
+    /// The course's statistics (`-stats`), where the render was asked to count them
+    /// (docs/SPEC.md §7).
+    pub counted: Option<RayStats>,
+    /// The box the `-grid` cells divide, where there was a grid.
+    pub grid_bounds: Option<crate::scene::Bounds>,
+}
+
+/// How the kernel finds the primitives a ray may hit (planes are always tested directly).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Acceleration {
+    /// Screen-space bins where their lists are short, else the hierarchy from
+    /// [`GpuOptions::bvh_min_primitives`](crate::gpu::GpuOptions::bvh_min_primitives) on, else flat loops.
+    #[default]
+    Auto,
+    /// Screen-space bins ([`crate::gpu::binning`]).
+    Bins,
+    /// The bounding volume hierarchy ([`crate::bvh`]).
+    Hierarchy,
+    /// Every primitive for every ray.
+    Flat,
+    /// The uniform grid `-grid` asks for (docs/SPEC.md §7); never chosen otherwise.
+    Grid,
+}
+
+impl Acceleration {
+    pub fn name(self) -> &'static str {
+        match self {
+            Acceleration::Auto => "auto",
+            Acceleration::Bins => "bins",
+            Acceleration::Hierarchy => "hierarchy",
+            Acceleration::Flat => "flat",
+            Acceleration::Grid => "grid",
+        }
+    }
+}
+
 /// Ray/triangle algorithms the kernel can be compiled with.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum TriangleTest {

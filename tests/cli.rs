@@ -893,7 +893,7 @@ fn a_batch_of_preview_lines_says_so_once() {
 }
 
 /// `auto` on a CPU Vulkan device (lavapipe) traces the ray trees of a small scene with the
-/// reference, which is quicker there (`CPU_DEVICE_TREE_PRIMITIVES` in src/app/backend.rs),
+/// reference, which is quicker there (`CPU_DEVICE_TREE_PRIMITIVES` in src/renderer/auto.rs),
 /// and `-v` says so; any other device gets the scene, as does a scene of more primitives
 /// everywhere. (900 × 900, so that neither is a job small enough for the reference at once.) Handed over or not, the image is the one its renderer makes on its own.
 #[test]

@@ -10,10 +10,11 @@
 
 mod common;
 
-use raycaster::gpu::{Acceleration, GpuError, GpuRenderer, RenderStats};
+use raycaster::gpu::{Acceleration, GpuError, GpuRenderer};
 use raycaster::image_io::{color_image, depth_image, normals_image};
 use raycaster::metrics::compare_frames;
 use raycaster::render::RenderOptions;
+use raycaster::render::RenderStats;
 use raycaster::scene::{load_scene, Scene};
 use std::fmt::Write as _;
 

@@ -54,26 +54,7 @@ pub enum Command {
     Version,
 }
 
-/// Which renderer to use.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
-pub enum BackendChoice {
-    Gpu,
-    Cpu,
-    #[default]
-    Auto,
-}
-
-impl BackendChoice {
-    pub const ALL: [BackendChoice; 3] = [BackendChoice::Gpu, BackendChoice::Cpu, BackendChoice::Auto];
-
-    pub fn name(self) -> &'static str {
-        match self {
-            BackendChoice::Gpu => "gpu",
-            BackendChoice::Cpu => "cpu",
-            BackendChoice::Auto => "auto",
-        }
-    }
-}
+pub use raycaster::renderer::BackendChoice;
 
 /// A render as the command line asks for it.
 #[derive(Clone, Debug, PartialEq)]

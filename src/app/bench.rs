@@ -10,6 +10,7 @@
 use crate::app::memory;
 use glam::DVec3;
 use raycaster::cpu::Reference;
+use raycaster::gpu::ray_tree::RenderRays;
 use raycaster::gpu::{Acceleration, GpuError, GpuOptions, GpuRenderer};
 use raycaster::grid::GridSize;
 use raycaster::metrics::{compare_frames, depth_range_of, OutputErrors};
@@ -47,7 +48,18 @@ impl Case {
     /// Whether the case casts rays other than primary ones: then the whole image is
     /// rendered by the reference too, timed, and its rays counted.
     pub fn secondary_rays(&self) -> bool {
-        self.shading.bounces > 0 || (self.shading.shadows && !self.scene.lights.is_empty())
+        RenderRays::new(&self.scene, &self.options()).secondary()
+    }
+
+    /// The render the GPU is timed on.
+    pub fn options(&self) -> RenderOptions {
+        RenderOptions {
+            triangle_test: self.triangle_test,
+            shading: self.shading,
+            grid: self.grid,
+            sampling: self.sampling,
+            ..RenderOptions::all(self.width, self.height)
+        }
     }
 }
 
@@ -141,13 +153,7 @@ impl Row {
 
 /// Measures `case` with `runs` renders (at least 1).
 pub fn run_case(gpu: &GpuRenderer, case: &Case, runs: usize) -> Result<Row, GpuError> {
-    let options = RenderOptions {
-        triangle_test: case.triangle_test,
-        shading: case.shading,
-        grid: case.grid,
-        sampling: case.sampling,
-        ..RenderOptions::all(case.width, case.height)
-    };
+    let options = case.options();
     let reference_options = RenderOptions { grid: case.reference_grid.or(case.grid), ..options };
     let gpu = &gpu.on_same_device(GpuOptions { acceleration: case.acceleration, ..*gpu.options() });
     let counts = case.scene.primitive_counts();

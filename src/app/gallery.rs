@@ -5,12 +5,12 @@
 //! nothing to compare with.
 
 use crate::app::args::GalleryArgs;
-use crate::app::backend::Backend;
 use crate::app::grade::compare_images;
 use crate::app::grade::course::{self, CourseLine};
 use crate::app::grade::html::{Card, Mark, Page, Panel};
 use crate::app::progress::Progress;
 use image::RgbImage;
+use raycaster::renderer::Renderer;
 use std::path::{Path, PathBuf};
 
 /// What the gallery holds.
@@ -25,7 +25,7 @@ pub struct Count {
 
 /// Renders every assignment of `args.corpus` and writes the page; `Err` when the corpus
 /// has no assignment or the page cannot be written.
-pub fn gallery(args: &GalleryArgs, backend: &Backend, progress: bool) -> Result<Count, String> {
+pub fn gallery(args: &GalleryArgs, backend: &Renderer, progress: bool) -> Result<Count, String> {
     let folders = assignments(&args.corpus)?;
     let mut page = Page::new(&args.html)?.tiled();
     page.paragraph(&format!(

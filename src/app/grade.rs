@@ -8,12 +8,12 @@ pub mod html;
 pub mod student;
 
 use crate::app::args::{GradeArgs, Judged, Thresholds};
-use crate::app::backend::Backend;
 use crate::app::progress::Progress;
 use course::CourseLine;
 use html::{Card, Mark, Page, Panel};
 use image::RgbImage;
 use raycaster::flip::{self, ErrorMap};
+use raycaster::renderer::Renderer;
 use std::path::{Path, PathBuf};
 
 /// How far a judged image is from ours.
@@ -128,7 +128,7 @@ pub fn verdict(scores: &Scores, thresholds: &Thresholds) -> Verdict {
 /// Grades every image of `args.assignment`'s command lines, in their order; `note` gets a
 /// line about each command line whose render of ours failed. `Err`: the assignment or the
 /// student's folder cannot be read at all.
-pub fn grade(args: &GradeArgs, backend: &Backend, progress: bool) -> Result<Vec<Graded>, String> {
+pub fn grade(args: &GradeArgs, backend: &Renderer, progress: bool) -> Result<Vec<Graded>, String> {
     let lines = course::read_lines(&args.assignment)?;
     let ours = tempfile::Builder::new().prefix("raycaster-reference-").tempdir().map_err(|e| e.to_string())?;
     let workspace = match &args.judged {

@@ -2,16 +2,17 @@
 //! one band's part files); `compare`'s renders; and batches of command lines.
 
 use crate::app::args::{Command, RenderArgs, Split};
-use crate::app::backend::Backend;
 use crate::app::output_file::{OutputFile, Pixels, Sink};
 use crate::app::part::{self, Identity, PartHeader};
 use crate::app::progress::Progress;
 use crate::app::{cli, memory, validate};
-use raycaster::gpu::{GpuError, RenderStats};
+use raycaster::gpu::GpuError;
 use raycaster::image_io::SampleDot;
 use raycaster::image_io::{self, ImageError, ImageFormat};
 use raycaster::metrics::OutputErrors;
+use raycaster::render::RenderStats;
 use raycaster::render::{Output, Outputs, RenderOptions};
+use raycaster::renderer::Renderer;
 use raycaster::sampling::{Sampler, Sampling};
 use raycaster::scene::{self, Scene, SceneError, SceneWarning};
 use std::fmt;
@@ -110,7 +111,7 @@ pub struct Report {
     /// did (a warning).
     pub notice: Option<String>,
     /// Why `auto` gave this scene to the reference without asking the GPU, when it did
-    /// ([`Backend::for_scene`]; for `--verbose`).
+    /// ([`Renderer::for_scene`]; for `--verbose`).
     pub handed_over: Option<&'static str>,
     pub stats: RenderStats,
     pub parse_ms: f64,
@@ -123,14 +124,14 @@ pub struct Report {
 
 impl Report {
     /// The lines `--verbose` prints after a render with `backend`.
-    pub fn verbose_lines(&self, backend: &Backend, args: &RenderArgs) -> Vec<String> {
+    pub fn verbose_lines(&self, backend: &Renderer, args: &RenderArgs) -> Vec<String> {
         let stats = &self.stats;
-        let backend = if self.handed_over.is_some() { Backend::reference() } else { backend };
+        let backend = if self.handed_over.is_some() { Renderer::reference() } else { backend };
         let mut lines = vec![format!("backend: {}", backend.describe())];
         lines.extend(self.handed_over.map(str::to_string));
         let tiles = if stats.tiles == 1 { "1 tile".to_string() } else { format!("{} tiles", stats.tiles) };
         let mut time = format!("time: parsing {:.1} ms, rendering {:.1} ms in {tiles}", self.parse_ms, self.render_ms);
-        if let Backend::Gpu(..) = backend {
+        if let Renderer::Gpu(..) = backend {
             lines.push(format!(
                 "kernel: {} triangle test, {} sphere test",
                 args.triangle_test.name(),
@@ -168,7 +169,7 @@ impl Report {
         time += &format!(", writing {:.1} ms", self.write_ms);
         lines.push(time);
         let mut memory = format!("memory: {}", memory::describe_peak());
-        if let Backend::Gpu(..) = backend {
+        if let Renderer::Gpu(..) = backend {
             memory += &format!(", scene data on the GPU {:.1} KiB", stats.scene_bytes as f64 / 1024.0);
         }
         lines.push(memory);
@@ -179,7 +180,7 @@ impl Report {
 /// Loads `args.input`, renders it with `backend` and writes every requested image (all of
 /// them or, on failure, none). With `progress`, a bar over the rows appears on a terminal
 /// when the render takes long.
-pub fn run(args: &RenderArgs, backend: &Backend, progress: bool) -> Result<Report, Error> {
+pub fn run(args: &RenderArgs, backend: &Renderer, progress: bool) -> Result<Report, Error> {
     let (scene, parse_ms) = load(args)?;
     run_loaded(scene, parse_ms, args, backend, progress)
 }
@@ -196,7 +197,7 @@ pub fn run_loaded(
     scene: Scene,
     parse_ms: f64,
     args: &RenderArgs,
-    backend: &Backend,
+    backend: &Renderer,
     progress: bool,
 ) -> Result<Report, Error> {
     let (backend, handed_over) = backend.for_scene(&scene, &options_for(args));
@@ -207,11 +208,11 @@ pub fn run_loaded(
 /// Renders an already-loaded scene as `args` asks and writes the images, tile by tile, so
 /// memory stays bounded by the tile whatever the image size. With `--tile K/N` only band K
 /// is rendered, into part files. Returns the backend's statistics and notice (see
-/// [`Backend::render_band`]), and the milliseconds spent rendering and writing.
+/// [`Renderer::render_band`]), and the milliseconds spent rendering and writing.
 pub fn render_scene(
     scene: &Scene,
     args: &RenderArgs,
-    backend: &Backend,
+    backend: &Renderer,
     progress: bool,
 ) -> Result<(RenderStats, Option<String>, f64, f64), Error> {
     let start = Instant::now();
@@ -306,7 +307,7 @@ fn pictures(scene: &Scene, args: &RenderArgs) -> Result<Vec<image_io::FinishedIm
 /// The flags that change pixels, as text. The CPU reference has its own intersection
 /// tests, so the kernel's variants count only on the GPU; the GPU and the reference differ
 /// in the last bits, so the backend counts.
-fn flags_text(args: &RenderArgs, backend: &Backend) -> String {
+fn flags_text(args: &RenderArgs, backend: &Renderer) -> String {
     let shading = &args.shading;
     let mut shade_back = String::new();
     for (given, flag) in [
@@ -336,12 +337,12 @@ fn flags_text(args: &RenderArgs, backend: &Backend) -> String {
         );
     }
     match backend {
-        Backend::Gpu(..) => format!(
+        Renderer::Gpu(..) => format!(
             "--backend gpu --triangle-test {} --sphere-test {}{shade_back}",
             args.triangle_test.name(),
             args.sphere_test.name()
         ),
-        Backend::Cpu => format!("--backend cpu{shade_back}"),
+        Renderer::Cpu => format!("--backend cpu{shade_back}"),
     }
 }
 
@@ -349,7 +350,7 @@ fn flags_text(args: &RenderArgs, backend: &Backend) -> String {
 fn part_headers(
     scene: &Scene,
     args: &RenderArgs,
-    backend: &Backend,
+    backend: &Renderer,
     tile: Split,
     outputs: &[OutputFile],
 ) -> Result<Vec<PartHeader>, String> {
@@ -443,7 +444,7 @@ pub enum LineReport {
     Stats(String),
     Failure(String),
     /// The line rendered, in this many milliseconds (parsing, rendering, writing; for
-    /// `--verbose`); by the reference when `auto` handed it over ([`Backend::for_scene`]).
+    /// `--verbose`); by the reference when `auto` handed it over ([`Renderer::for_scene`]).
     Rendered {
         ms: f64,
         by_reference: bool,
@@ -479,7 +480,7 @@ pub struct BatchCount {
 /// prints.
 pub fn run_batch(
     text: &str,
-    backend: &Backend,
+    backend: &Renderer,
     shard: Option<Split>,
     progress: bool,
     mut report: impl FnMut(usize, LineReport),

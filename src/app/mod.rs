@@ -1,21 +1,20 @@
-//! The `raycaster` command's own layer over the library. Nothing here is part of the
-//! library's API. Modules import only from the layers below their own:
+//! The `raycaster` command's own layer over the library, which renders through
+//! [`raycaster::renderer::Renderer`]. Nothing here is part of the library's API. Modules import only from the layers below their own:
 //!
 //! 1. [`exit`]: how the command ends; [`signals`]: interrupts, ending through [`exit`];
-//! 2. [`window`]: `-gui`'s live view, over [`job`] and [`backend`];
+//! 2. [`window`]: `-gui`'s live view, over [`job`];
 //!    [`job`]: one command line's render, `compare`'s, and batches; [`stitch`]: assembling
 //!    the parts of a split render; [`bench`]: `raycaster bench`; [`grade`]: judging a
 //!    student's images, and the HTML pages; [`gallery`]: every assignment on a page;
 //! 3. [`cli`]: parsing; [`validate`]: the checks of a parsed command line that look at the
 //!    file system; [`output_file`]: the image files asked for and the sinks they are
-//!    streamed into; [`backend`]: the renderer;
+//!    streamed into;
 //! 4. [`flags`]: the table of flags, from which parsing, help and suggestions come;
 //! 5. leaves: [`args`] (the parsed command line), [`part`] (the part-file format),
 //!    [`progress`] (the progress bar), [`memory`] (the peak-memory probe), [`interrupt`]
 //!    (what can interrupt the command, and its exit status).
 
 pub mod args;
-pub mod backend;
 pub mod bench;
 pub mod cli;
 pub mod exit;

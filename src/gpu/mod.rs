@@ -53,6 +53,5 @@ pub use options::{Acceleration, GpuOptions, MAX_TILE_BYTES};
 pub use prepared::PreparedScene;
 pub use readback::ReadTile;
 pub use renderer::GpuRenderer;
-pub use stats::RenderStats;
 pub use tiles::MAX_SAMPLE_BYTES;
 pub use workgroup::{BIN_PACKET, WORKGROUP};

@@ -43,31 +43,4 @@ impl Default for GpuOptions {
     }
 }
 
-/// How the kernel finds the primitives a ray may hit (planes are always tested directly).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
-pub enum Acceleration {
-    /// Screen-space bins where their lists are short, else the hierarchy from
-    /// [`GpuOptions::bvh_min_primitives`] on, else flat loops.
-    #[default]
-    Auto,
-    /// Screen-space bins ([`super::binning`]).
-    Bins,
-    /// The bounding volume hierarchy ([`crate::bvh`]).
-    Hierarchy,
-    /// Every primitive for every ray.
-    Flat,
-    /// The uniform grid `-grid` asks for (docs/SPEC.md §7); never chosen otherwise.
-    Grid,
-}
-
-impl Acceleration {
-    pub fn name(self) -> &'static str {
-        match self {
-            Acceleration::Auto => "auto",
-            Acceleration::Bins => "bins",
-            Acceleration::Hierarchy => "hierarchy",
-            Acceleration::Flat => "flat",
-            Acceleration::Grid => "grid",
-        }
-    }
-}
+pub use crate::render::Acceleration;

@@ -16,11 +16,11 @@ use super::layout::{GpuTexture, Params, PixelLayout};
 use super::parallel::in_parallel;
 use super::readback::Counters;
 use super::renderer::{Compiled, GpuRenderer};
-use super::stats::RenderStats;
 use super::tiles::{SlotSizes, TileBuffers, TileSlot, Tiling};
 use super::upload::upload_inputs;
 use super::{precision, texture_range, unsupported, voxels};
 use crate::render::RenderOptions;
+use crate::render::RenderStats;
 use crate::scene::Scene;
 
 /// A scene ready on the device for one image size and set of outputs.

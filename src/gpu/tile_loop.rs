@@ -8,8 +8,8 @@ use super::error::GpuError;
 use super::handover::RenderAgain;
 use super::prepared::PreparedScene;
 use super::readback::{map_async, ReadTile};
-use super::stats::RenderStats;
 use crate::render::row_tiles;
+use crate::render::RenderStats;
 #[cfg(not(target_arch = "wasm32"))]
 use {super::renderer::GpuRenderer, crate::render::Frame, crate::render::RenderOptions, crate::scene::Scene};
 
@@ -62,7 +62,7 @@ impl PreparedScene<'_> {
                 let readable = self.dispatch.slots[slot].buffers.readable();
                 let handed =
                     again.show_tile(readable, self.dispatch.tile_bytes(rows), (first_row, rows), &mut on_tile)?;
-                stats.add_tile(handed, kernel_ns);
+                handed.count_tile(&mut stats, kernel_ns);
                 // The submitter may already have finished; then nobody needs the slot back.
                 let _ = free_tx.send(slot);
             }
@@ -96,7 +96,7 @@ impl PreparedScene<'_> {
                 None => None,
             };
             let handed = again.show_tile(slot.readable(), bytes, (first_row, rows), &mut on_tile)?;
-            stats.add_tile(handed, kernel_ns);
+            handed.count_tile(&mut stats, kernel_ns);
         }
         if let Some(counted) = counted {
             stats.counted = Some(again.add_counts(counted, self.counters.read_async(self.dispatch.gpu).await?));

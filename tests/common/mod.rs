@@ -72,7 +72,7 @@ pub fn render_gpu_tiles(
     gpu: &GpuRenderer,
     scene: &raycaster::scene::Scene,
     options: &raycaster::render::RenderOptions,
-) -> (raycaster::render::Frame, raycaster::gpu::RenderStats) {
+) -> (raycaster::render::Frame, raycaster::render::RenderStats) {
     let mut frame = raycaster::render::Frame::new(options);
     let stats = gpu
         .render_tiles(scene, options, |first_row, tile| {

@@ -178,11 +178,13 @@ async fn render_scene(
     let (frame, kernel_ns, backend) = match render_gpu(&gpu, &scene, &options).await? {
         Ok((frame, kernel_ns)) => (frame, kernel_ns, adapter_name(gpu.adapter_info())),
         // As the command line's `--backend auto`: what the kernel refuses, the reference renders.
-        Err(e) if e.reference_renders_it() => {
-            notes.push(format!("raycaster: warning: {}; rendering with the f64 CPU reference instead", refusal(&e)));
-            (raycaster::cpu::render(&scene, &options), None, "the f64 CPU reference".to_string())
-        }
-        Err(e) => return Err(e.to_string()),
+        Err(e) => match raycaster::renderer::fallback_notice(&e) {
+            Some(notice) => {
+                notes.push(format!("raycaster: warning: {notice}"));
+                (raycaster::cpu::render(&scene, &options), None, "the f64 CPU reference".to_string())
+            }
+            None => return Err(e.to_string()),
+        },
     };
     let render_ms = start.elapsed().as_secs_f64() * 1e3;
     let depth_range = match flags.depth_min.is_nan() || flags.depth_max.is_nan() {
@@ -211,16 +213,6 @@ fn check_size(width: u32, height: u32) -> Result<(), String> {
         ));
     }
     Ok(())
-}
-
-/// Why the kernel refused, without its advice to use `--backend cpu` (the page falls back).
-fn refusal(e: &GpuError) -> String {
-    match e {
-        GpuError::Precision(e) => e.to_string(),
-        GpuError::Unsupported(e) => e.to_string(),
-        GpuError::NonFinite(what) => what.clone(),
-        other => other.to_string(),
-    }
 }
 
 /// The adapter's name where the browser tells it (Chromium does not).

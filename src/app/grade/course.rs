@@ -2,8 +2,8 @@
 //! writes, and our own render of them into a folder of ours.
 
 use crate::app::args::{Command, RenderArgs};
-use crate::app::backend::Backend;
 use crate::app::{cli, job, validate};
+use raycaster::renderer::Renderer;
 use std::path::{Path, PathBuf};
 
 /// One command line of `commands.txt`, with the images it writes.
@@ -58,7 +58,7 @@ fn images_of(args: &RenderArgs) -> Vec<PathBuf> {
 
 /// Renders `line` as if run inside `folder` (its scene read from there), writing its images
 /// under `into` at the paths the line names. `Err` says why it failed.
-pub fn render_into(line: &CourseLine, folder: &Path, into: &Path, backend: &Backend) -> Result<(), String> {
+pub fn render_into(line: &CourseLine, folder: &Path, into: &Path, backend: &Renderer) -> Result<(), String> {
     let mut args = line.args.clone()?;
     args.input = folder.join(&args.input);
     args.gui = false;

@@ -13,8 +13,7 @@
 pub mod orbit;
 mod present;
 
-use crate::app::args::{BackendChoice, RenderArgs};
-use crate::app::backend::{Backend, Fallback};
+use crate::app::args::RenderArgs;
 use crate::app::exit::{say, Failure};
 use crate::app::job;
 use orbit::Orbit;
@@ -22,6 +21,7 @@ use present::Screen;
 use raycaster::gpu::GpuOptions;
 use raycaster::image_io;
 use raycaster::render::{Frame, Output, Outputs};
+use raycaster::renderer::Renderer;
 use raycaster::scene::Scene;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -100,7 +100,7 @@ struct LiveView<'a> {
     orbit: Orbit,
     output: Output,
     window: Option<Arc<Window>>,
-    screen: Option<(Screen, Backend)>,
+    screen: Option<(Screen, Renderer)>,
     cursor: (f64, f64),
     drag: Option<Drag>,
     /// The camera moved at this time; the view renders small until [`SETTLE`] has passed.
@@ -151,13 +151,7 @@ impl<'a> LiveView<'a> {
             event_loop.create_window(attributes).map_err(|e| Ended::NoWindow(format!("cannot open a window: {e}")))?,
         );
         let screen = Screen::open(window.clone()).map_err(Ended::NoWindow)?;
-        let gpu = || Box::new(screen.gpu().on_same_device(GpuOptions::default()));
-        let backend = match self.args.backend {
-            BackendChoice::Gpu => Backend::Gpu(gpu(), Fallback::Refuse),
-            BackendChoice::Auto => Backend::Gpu(gpu(), Fallback::Reference),
-            // The reference renders; the device only presents.
-            BackendChoice::Cpu => Backend::Cpu,
-        };
+        let backend = Renderer::on_gpu(screen.gpu().on_same_device(GpuOptions::default()), self.args.backend);
         if self.verbose {
             say(&format!("gui: {}; keys: c n d (colour, normals, depth), r (write the files), q", backend.describe()));
         }
@@ -200,7 +194,7 @@ impl<'a> LiveView<'a> {
     fn warm_up(&mut self) -> Result<(), Failure> {
         self.warmed = true;
         // The reference compiles nothing.
-        let Some((_, backend @ Backend::Gpu(..))) = self.screen.as_ref() else { return Ok(()) };
+        let Some((_, backend @ Renderer::Gpu(..))) = self.screen.as_ref() else { return Ok(()) };
         let start = Instant::now();
         render_view(backend, &self.scene, self.args, self.output, (WARM_UP_SIDE, WARM_UP_SIDE))?;
         if self.verbose {
@@ -377,7 +371,7 @@ fn moving_scale(full_frame: Duration) -> u32 {
 /// One output of `scene` at `size`, as the 8-bit RGB bytes its file would hold. Depth is
 /// shown over the command line's `-depth` range, else over the nearest and farthest hits.
 fn render_view(
-    backend: &Backend,
+    backend: &Renderer,
     scene: &Scene,
     args: &RenderArgs,
     output: Output,

@@ -1,0 +1,296 @@
+//! The one place that chooses who renders: the GPU kernel ([`crate::gpu`]) or the f64 CPU
+//! reference ([`crate::cpu`]). The command line, the live window, the web page and the Python
+//! package render through a [`Renderer`]; none of them re-implements the fallback.
+//!
+//! `--backend auto` ([`BackendChoice::Auto`]) renders on the GPU, and gives the reference
+//! what the GPU would render unfaithfully or slower: a scene out of the f32 kernel's range or
+//! with shading it does not implement (the GPU refuses it before its first tile,
+//! [`fallback_notice`]), a job too small to pay for the device's start-up
+//! ([`auto::reference_is_quicker`]), and small ray trees on a CPU Vulkan device
+//! ([`auto::reference_traces_quicker`]). Each hand-over comes with a notice naming why.
+//!
+//! ```no_run
+//! use raycaster::renderer::{BackendChoice, Renderer};
+//! use raycaster::{render::RenderOptions, scene};
+//!
+//! # fn main() -> Result<(), Box<dyn std::error::Error>> {
+//! let scene = scene::load_scene("scenes/triangles.txt".as_ref())?;
+//! let options = RenderOptions::all(320, 240);
+//! let (renderer, notice) = Renderer::open_for(BackendChoice::Auto, &scene, &options)?;
+//! let rendered = renderer.render(&scene, &options)?;
+//! println!("{} ({:?})", rendered.backend, notice.or(rendered.notice));
+//! # Ok(())
+//! # }
+//! ```
+
+pub mod auto;
+#[cfg(not(target_arch = "wasm32"))]
+mod bands;
+
+use crate::gpu::{GpuError, GpuRenderer};
+use crate::render::{Frame, Output, RenderStats};
+#[cfg(not(target_arch = "wasm32"))]
+use crate::{render::RenderOptions, scene::Scene};
+#[cfg(not(target_arch = "wasm32"))]
+use bands::{or_reference, reference_band, Attempt};
+
+/// Which renderer a user asks for (`--backend`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum BackendChoice {
+    /// The GPU; a scene it cannot render faithfully is refused.
+    Gpu,
+    /// The f64 reference.
+    Cpu,
+    /// The GPU, and the reference for what the GPU would render unfaithfully or slower.
+    #[default]
+    Auto,
+}
+
+impl BackendChoice {
+    pub const ALL: [BackendChoice; 3] = [BackendChoice::Gpu, BackendChoice::Cpu, BackendChoice::Auto];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            BackendChoice::Gpu => "gpu",
+            BackendChoice::Cpu => "cpu",
+            BackendChoice::Auto => "auto",
+        }
+    }
+}
+
+/// A ready renderer.
+pub enum Renderer {
+    /// The GPU kernel; with [`Fallback::Reference`] (`auto`), scenes its f32 kernel cannot
+    /// render faithfully ([`crate::gpu::precision`]) or does not shade yet
+    /// ([`crate::gpu::unsupported`]) go to the CPU reference instead.
+    Gpu(Box<GpuRenderer>, Fallback),
+    Cpu,
+}
+
+/// Whether a GPU renderer hands scenes it refuses to the reference.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Fallback {
+    /// `--backend gpu`: refuse them.
+    Refuse,
+    /// `--backend auto`: render them with the f64 reference, with a notice.
+    Reference,
+}
+
+/// The reference, for the jobs `auto` hands it from an open GPU ([`Renderer::for_scene`]).
+/// (Native only: wgpu's WebGPU device is not `Sync`, and the page calls no blocking render.)
+#[cfg(not(target_arch = "wasm32"))]
+static REFERENCE: Renderer = Renderer::Cpu;
+
+/// A whole frame and how it was rendered ([`Renderer::render`]).
+pub struct Rendered {
+    pub frame: Frame,
+    pub stats: RenderStats,
+    /// Who rendered, in words ([`Renderer::describe`]).
+    pub backend: String,
+    /// Why `auto` rendered with the reference, when it did.
+    pub notice: Option<String>,
+}
+
+impl Renderer {
+    /// Opens the renderer `choice` asks for. With `Auto`, a missing GPU falls back to the CPU
+    /// reference and the returned notice says so.
+    #[cfg(not(target_arch = "wasm32"))]
+    pub fn open(choice: BackendChoice) -> Result<(Renderer, Option<String>), GpuError> {
+        match choice {
+            BackendChoice::Cpu => Ok((Renderer::Cpu, None)),
+            BackendChoice::Gpu => Ok((Renderer::on_gpu(GpuRenderer::new()?, choice), None)),
+            BackendChoice::Auto => match GpuRenderer::new() {
+                Ok(gpu) => Ok((Renderer::on_gpu(gpu, choice), None)),
+                Err(e) => Ok((Renderer::Cpu, Some(format!("{e}; rendering with the CPU reference instead")))),
+            },
+        }
+    }
+
+    /// [`Renderer::open`] for one job known in advance: with `Auto`, a job so small that the
+    /// device's start-up would dominate ([`auto::reference_is_quicker`]) gets the reference
+    /// without opening the GPU at all.
+    #[cfg(not(target_arch = "wasm32"))]
+    pub fn open_for(
+        choice: BackendChoice,
+        scene: &Scene,
+        options: &RenderOptions,
+    ) -> Result<(Renderer, Option<String>), GpuError> {
+        match choice == BackendChoice::Auto && auto::reference_is_quicker(scene, options) {
+            true => Ok((Renderer::Cpu, None)),
+            false => Renderer::open(choice),
+        }
+    }
+
+    /// A renderer on a GPU already open (the live window's device): `Cpu` leaves the device
+    /// to present only.
+    pub fn on_gpu(gpu: GpuRenderer, choice: BackendChoice) -> Renderer {
+        match choice {
+            BackendChoice::Gpu => Renderer::Gpu(Box::new(gpu), Fallback::Refuse),
+            BackendChoice::Auto => Renderer::Gpu(Box::new(gpu), Fallback::Reference),
+            BackendChoice::Cpu => Renderer::Cpu,
+        }
+    }
+
+    /// The renderer that renders `scene`: this one, or with `auto` the reference where it
+    /// traces the scene quicker than the open GPU ([`auto::reference_traces_quicker`]), with
+    /// the reason in words.
+    #[cfg(not(target_arch = "wasm32"))]
+    pub fn for_scene(&self, scene: &Scene, options: &RenderOptions) -> (&Renderer, Option<&'static str>) {
+        match self {
+            Renderer::Gpu(gpu, Fallback::Reference) => match auto::reference_traces_quicker(gpu, scene, options) {
+                Some(why) => (&REFERENCE, Some(why)),
+                None => (self, None),
+            },
+            _ => (self, None),
+        }
+    }
+
+    /// The f64 reference.
+    #[cfg(not(target_arch = "wasm32"))]
+    pub fn reference() -> &'static Renderer {
+        &REFERENCE
+    }
+
+    /// The GPU, where this renderer has one.
+    pub fn gpu(&self) -> Option<&GpuRenderer> {
+        match self {
+            Renderer::Gpu(gpu, _) => Some(gpu),
+            Renderer::Cpu => None,
+        }
+    }
+
+    /// What renders, in words: the adapter, or the reference and its threads.
+    pub fn describe(&self) -> String {
+        match self {
+            Renderer::Gpu(gpu, _) => {
+                let info = gpu.adapter_info();
+                format!("gpu, {} ({:?}, {:?})", info.name, info.backend, info.device_type)
+            }
+            Renderer::Cpu => match rayon::current_num_threads() {
+                1 => "cpu, the f64 reference on 1 thread".to_string(),
+                n => format!("cpu, the f64 reference on {n} threads"),
+            },
+        }
+    }
+
+    /// Renders `scene` whole, into float buffers, with whoever [`Renderer::for_scene`] picks.
+    #[cfg(not(target_arch = "wasm32"))]
+    pub fn render(&self, scene: &Scene, options: &RenderOptions) -> Result<Rendered, GpuError> {
+        let (renderer, handed_over) = self.for_scene(scene, options);
+        let mut frame = Frame::new(options);
+        let (stats, notice) = renderer.render_band(scene, options, 0, options.height, |first_row, tile| {
+            frame.paste(first_row, &tile);
+            Ok::<(), GpuError>(())
+        })?;
+        let backend = match &notice {
+            Some(_) => REFERENCE.describe(),
+            None => renderer.describe(),
+        };
+        Ok(Rendered { frame, stats, backend, notice: notice.or(handed_over.map(str::to_string)) })
+    }
+
+    /// Renders image rows `first .. first + rows` (the whole image, or one band of a split
+    /// render) in tiles of full rows, top first, handing each tile and its first image row
+    /// to `on_tile`; see [`GpuRenderer::render_band`]. Returns the statistics, and a notice
+    /// when `auto` handed the scene to the reference.
+    #[cfg(not(target_arch = "wasm32"))]
+    pub fn render_band<E: From<GpuError>>(
+        &self,
+        scene: &Scene,
+        options: &RenderOptions,
+        first: u32,
+        rows: u32,
+        mut on_tile: impl FnMut(u32, Frame) -> Result<(), E>,
+    ) -> Result<(RenderStats, Option<String>), E> {
+        match self {
+            Renderer::Gpu(gpu, fallback) => or_reference(
+                *fallback,
+                &mut on_tile,
+                |on_tile| gpu.render_band(scene, options, first, rows, |r, t| on_tile(r, t).map_err(Attempt::Tile)),
+                |on_tile| reference_band(scene, options, (first, rows), on_tile),
+            ),
+            Renderer::Cpu => Ok((reference_band(scene, options, (first, rows), on_tile)?, None)),
+        }
+    }
+
+    /// Renders the 8-bit images `options` asks for (the depth visualisation over
+    /// `depth_range`) for image rows `first .. first + rows` (the whole image, or one band of
+    /// a split render), in tiles of full rows, top first. On the GPU the kernel quantises,
+    /// so only the bytes of the images cross from the device.
+    #[cfg(not(target_arch = "wasm32"))]
+    pub fn render_images<E: From<GpuError>>(
+        &self,
+        scene: &Scene,
+        options: &RenderOptions,
+        depth_range: (f32, f32),
+        (first, rows): (u32, u32),
+        mut on_tile: impl FnMut(u32, ImageRows) -> Result<(), E>,
+    ) -> Result<(RenderStats, Option<String>), E> {
+        use crate::image_io;
+        let (min, max) = depth_range;
+        let wants = |output| options.outputs.contains(output);
+        let from_frame = |frame: &Frame| ImageRows {
+            rows: frame.height,
+            color: wants(Output::Color).then(|| image_io::color_image(frame).into_raw()),
+            normals: wants(Output::Normals).then(|| image_io::normals_image(frame).into_raw()),
+            depth: wants(Output::Depth).then(|| image_io::depth_image(frame, min, max).into_raw()),
+        };
+        match self {
+            Renderer::Gpu(gpu, fallback) => or_reference(
+                *fallback,
+                &mut on_tile,
+                |on_tile| {
+                    gpu.prepare(scene, options, true)?.render_band(first, rows, |tile| {
+                        let rows = ImageRows {
+                            rows: tile.rows,
+                            color: wants(Output::Color).then(|| tile.color_rgb()),
+                            normals: wants(Output::Normals).then(|| tile.normals_rgb()),
+                            depth: wants(Output::Depth).then(|| tile.depth_rgb(min, max)),
+                        };
+                        on_tile(tile.first_row, rows).map_err(Attempt::Tile)
+                    })
+                },
+                |on_tile| reference_band(scene, options, (first, rows), |row, frame| on_tile(row, from_frame(&frame))),
+            ),
+            Renderer::Cpu => {
+                let stats =
+                    reference_band(scene, options, (first, rows), |row, frame| on_tile(row, from_frame(&frame)))?;
+                Ok((stats, None))
+            }
+        }
+    }
+}
+
+/// Where `auto` gives a scene the GPU refused to the reference (out of the kernel's f32
+/// range, shading it does not implement, a value it cannot upload), the notice that says
+/// why; `None` for a failure the reference cannot mend (no device, a lost device).
+pub fn fallback_notice(e: &GpuError) -> Option<String> {
+    let reason = match e {
+        GpuError::Precision(e) => e.to_string(),
+        GpuError::Unsupported(e) => e.to_string(),
+        GpuError::NonFinite(what) => what.clone(),
+        _ => return None,
+    };
+    Some(format!("{reason}; rendering with the f64 CPU reference instead"))
+}
+
+/// One tile's rows of each 8-bit image asked for, RGB, top row first.
+pub struct ImageRows {
+    /// How many rows the tile has.
+    pub rows: u32,
+    pub color: Option<Vec<u8>>,
+    pub normals: Option<Vec<u8>>,
+    pub depth: Option<Vec<u8>>,
+}
+
+impl ImageRows {
+    /// The rows of `output`'s image, once (each output is asked for at most once).
+    pub fn take(&mut self, output: Output) -> Vec<u8> {
+        let rows = match output {
+            Output::Color => &mut self.color,
+            Output::Normals => &mut self.normals,
+            Output::Depth => &mut self.depth,
+        };
+        rows.take().expect("the render computed every output asked for")
+    }
+}

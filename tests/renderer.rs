@@ -1,0 +1,91 @@
+//! The library's `Renderer`: the one place that chooses the GPU or the f64 reference
+//! (src/renderer.rs). What `auto` hands the reference is checked against the reference
+//! itself, rendered on its own; what the GPU renders, against the reference's pixels.
+
+mod common;
+
+use raycaster::gpu::GpuOptions;
+use raycaster::render::RenderOptions;
+use raycaster::renderer::{auto, fallback_notice, BackendChoice, Renderer};
+use raycaster::scene::{self, Scene};
+use std::path::Path;
+
+/// A unit sphere at the origin, seen by an orthographic camera.
+const SPHERE: &str = "OrthographicCamera { center 0 0 10 direction 0 0 -1 up 0 1 0 size 3 }
+Lights { numLights 1 DirectionalLight { direction -0.3 -0.5 -1 color 0.9 0.9 0.9 } }
+Background { color 0.25 0.25 0.25 ambientLight 0.15 0.15 0.15 }
+Materials { numMaterials 1 Material { diffuseColor 1 0.2 0.2 } }
+Group { numObjects 1 MaterialIndex 0 Sphere { center 0 0 0 radius 1 } }
+";
+
+fn sphere_at(scale: f64) -> Scene {
+    // Scaled as a whole, the picture is the same; its coordinates leave the f32 kernel's range.
+    let text = SPHERE
+        .replace("center 0 0 10", &format!("center 0 0 {}", 10.0 * scale))
+        .replace("size 3", &format!("size {}", 3.0 * scale))
+        .replace("radius 1", &format!("radius {scale}"));
+    scene::parse_scene(&text, Path::new("sphere.txt")).expect("the test's scene parses")
+}
+
+fn on_gpu(choice: BackendChoice) -> Option<Renderer> {
+    common::gpu().map(|gpu| Renderer::on_gpu(gpu.on_same_device(GpuOptions::default()), choice))
+}
+
+#[test]
+fn auto_gives_a_job_too_small_for_the_device_to_the_reference() {
+    let scene = sphere_at(1.0);
+    // One primitive: pixels × primitives against the 2 M pairs of REFERENCE_QUICKER_BELOW.
+    assert!(auto::reference_is_quicker(&scene, &RenderOptions::all(64, 64)));
+    assert!(!auto::reference_is_quicker(&scene, &RenderOptions::all(2000, 1001)));
+    // Decided before any device is opened: this holds on a machine without a GPU too.
+    let (renderer, notice) = Renderer::open_for(BackendChoice::Auto, &scene, &RenderOptions::all(64, 64)).unwrap();
+    assert!(renderer.gpu().is_none(), "a 64² sphere is the reference's");
+    assert_eq!(notice, None);
+    let (renderer, _) = Renderer::open_for(BackendChoice::Cpu, &scene, &RenderOptions::all(2000, 2000)).unwrap();
+    assert!(renderer.gpu().is_none());
+}
+
+#[test]
+fn auto_renders_what_the_gpu_refuses_with_the_reference_and_says_why() {
+    let (Some(gpu), Some(auto)) = (on_gpu(BackendChoice::Gpu), on_gpu(BackendChoice::Auto)) else { return };
+    let scene = sphere_at(1e30);
+    let options = RenderOptions::all(48, 48);
+
+    let refused = gpu.render(&scene, &options).err().expect("1e30 is beyond the f32 kernel's range");
+    let notice = fallback_notice(&refused).expect("a refusal the reference can mend");
+    assert!(notice.contains("outside the range the GPU's f32 kernel renders faithfully"), "{notice}");
+    assert!(notice.ends_with("; rendering with the f64 CPU reference instead"), "{notice}");
+
+    let rendered = auto.render(&scene, &options).unwrap();
+    assert_eq!(rendered.notice.as_deref(), Some(notice.as_str()));
+    assert!(rendered.backend.starts_with("cpu, the f64 reference"), "{}", rendered.backend);
+    // The reference's own frame, rendered without the Renderer: every float the same.
+    assert_eq!(rendered.frame, raycaster::cpu::render(&scene, &options));
+    // And the picture is the unit sphere's, scaled: a disk of diameter 2 in a square of side 3, π/9 of the pixels.
+    let hits = rendered.frame.hit.iter().filter(|&&h| h).count() as f64 / options.pixel_count() as f64;
+    assert!((hits - std::f64::consts::FRAC_PI_4 * 4.0 / 9.0).abs() < 0.03, "{hits}");
+}
+
+#[test]
+fn the_gpu_renders_what_it_can_and_agrees_with_the_reference() {
+    let Some(auto) = on_gpu(BackendChoice::Auto) else { return };
+    let scene = sphere_at(1.0);
+    let options = RenderOptions::all(80, 64);
+    let rendered = auto.render(&scene, &options).unwrap();
+    assert_eq!(rendered.notice, None);
+    assert!(rendered.backend.starts_with("gpu, "), "{}", rendered.backend);
+    assert!(rendered.stats.tiles >= 1);
+    let reference = raycaster::cpu::render(&scene, &options);
+    let depth_range = raycaster::metrics::depth_range_of(&reference);
+    for errors in raycaster::metrics::compare_frames(&rendered.frame, &reference, depth_range) {
+        assert_eq!(errors.hit_mismatches, 0, "{:?}", errors.output);
+        assert_eq!(errors.image.off_by_more_than_one, 0, "{:?}", errors.output);
+        assert_eq!(errors.non_finite, 0, "{:?}", errors.output);
+    }
+}
+
+#[test]
+fn a_gpu_failure_the_reference_cannot_mend_has_no_fallback() {
+    let lost = raycaster::gpu::GpuError::NoAdapter("none in this test".into());
+    assert_eq!(fallback_notice(&lost), None);
+}
