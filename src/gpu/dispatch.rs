@@ -97,44 +97,10 @@ impl Dispatch<'_> {
             let mut pass =
                 encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("raycast"), timestamp_writes });
             pass.set_bind_group(0, bind_group, &[]);
-            let columns = self.options.width.div_ceil(WORKGROUP);
             match &self.sampled {
-                None => {
-                    pass.set_pipeline(self.pipeline.as_ref().expect("a render without sampling has its pixels kernel"));
-                    // Packets start at the tile's first row rounded down to a multiple of PACKET.
-                    let packets = (first_row % self.packet + rows).div_ceil(self.packet);
-                    pass.dispatch_workgroups(columns, packets.div_ceil(WORKGROUP), 1);
-                }
+                None => self.dispatch_pixels(&mut pass, first_row, rows),
                 Some(sampled) => {
-                    // Every sample of the tile's rows and of the rows the filter reads around
-                    // them, then each pixel from them (the two dispatches are ordered: wgpu
-                    // puts a barrier between a pass's dispatches that write and read a buffer).
-                    let sampling = &sampled.sampling;
-                    let (sample_first, sample_rows) = (traced_first, traced_rows);
-                    let radius = sampling.radius();
-                    let header = GpuSampling {
-                        count: sampling.count(),
-                        side: sampling.sampler.side(),
-                        seed: sampling.seed,
-                        kind: sampling.sampler.kind(),
-                        filter_kind: sampling.filter.kind(),
-                        radius,
-                        parameter: sampling.filter.parameter() as f32,
-                        first_row: sample_first,
-                        rows: sample_rows,
-                        _pad: [0; 3],
-                    };
-                    gpu.queue.write_buffer(&s.sampling, 0, bytemuck::bytes_of(&header));
-                    pass.set_pipeline(&sampled.samples);
-                    // With bins, an invocation traces a packet: a pixel's samples, or for fewer
-                    // samples than a packet, those of a stack of rows starting at a multiple of
-                    // their count (the kernel's `packet_rows`).
-                    let packets = sampling.count().div_ceil(self.packet);
-                    let stack = (self.packet / sampling.count()).max(1);
-                    let stacks = (sample_first % stack + sample_rows).div_ceil(stack);
-                    pass.dispatch_workgroups(columns, stacks.div_ceil(WORKGROUP), packets);
-                    pass.set_pipeline(&sampled.filter);
-                    pass.dispatch_workgroups(columns, rows.div_ceil(WORKGROUP), 1);
+                    self.dispatch_samples(&mut pass, sampled, &s.sampling, (traced_first, traced_rows), rows)
                 }
             }
         }
@@ -145,5 +111,51 @@ impl Dispatch<'_> {
             timer.resolve(&mut encoder);
         }
         gpu.queue.submit([encoder.finish()])
+    }
+
+    /// The pixels kernel over the tile's rows: an invocation per pixel, or per packet.
+    fn dispatch_pixels(&self, pass: &mut wgpu::ComputePass<'_>, first_row: u32, rows: u32) {
+        pass.set_pipeline(self.pipeline.as_ref().expect("a render without sampling has its pixels kernel"));
+        // Packets start at the tile's first row rounded down to a multiple of PACKET.
+        let packets = (first_row % self.packet + rows).div_ceil(self.packet);
+        pass.dispatch_workgroups(self.options.width.div_ceil(WORKGROUP), packets.div_ceil(WORKGROUP), 1);
+    }
+
+    /// Every sample of the tile's rows and of the rows the filter reads around them
+    /// (`traced`), then each of the tile's `rows` of pixels from them (the two dispatches are
+    /// ordered: wgpu puts a barrier between a pass's dispatches that write and read a buffer).
+    fn dispatch_samples(
+        &self,
+        pass: &mut wgpu::ComputePass<'_>,
+        sampled: &Sampled,
+        header_buffer: &wgpu::Buffer,
+        (sample_first, sample_rows): (u32, u32),
+        rows: u32,
+    ) {
+        let sampling = &sampled.sampling;
+        let header = GpuSampling {
+            count: sampling.count(),
+            side: sampling.sampler.side(),
+            seed: sampling.seed,
+            kind: sampling.sampler.kind(),
+            filter_kind: sampling.filter.kind(),
+            radius: sampling.radius(),
+            parameter: sampling.filter.parameter() as f32,
+            first_row: sample_first,
+            rows: sample_rows,
+            _pad: [0; 3],
+        };
+        self.gpu.queue.write_buffer(header_buffer, 0, bytemuck::bytes_of(&header));
+        let columns = self.options.width.div_ceil(WORKGROUP);
+        pass.set_pipeline(&sampled.samples);
+        // With bins, an invocation traces a packet: a pixel's samples, or for fewer samples
+        // than a packet, those of a stack of rows starting at a multiple of their count (the
+        // kernel's `packet_rows`).
+        let packets = sampling.count().div_ceil(self.packet);
+        let stack = (self.packet / sampling.count()).max(1);
+        let stacks = (sample_first % stack + sample_rows).div_ceil(stack);
+        pass.dispatch_workgroups(columns, stacks.div_ceil(WORKGROUP), packets);
+        pass.set_pipeline(&sampled.filter);
+        pass.dispatch_workgroups(columns, rows.div_ceil(WORKGROUP), 1);
     }
 }

@@ -17,7 +17,7 @@ use super::parallel::in_parallel;
 use super::readback::Counters;
 use super::renderer::{Compiled, GpuRenderer};
 use super::tiles::{SlotSizes, TileBuffers, TileSlot, Tiling};
-use super::upload::upload_inputs;
+use super::upload::{upload_inputs, Inputs};
 use super::{precision, texture_range, unsupported, voxels};
 use crate::render::RenderOptions;
 use crate::render::RenderStats;
@@ -56,84 +56,174 @@ impl<'a> PreparedScene<'a> {
         // Refused before any tile is handed out: `auto` then renders with the reference.
         let traced = unsupported::check(scene, options).map_err(GpuError::Unsupported)?;
         precision::check(scene, options).map_err(GpuError::Precision)?;
-        let rays = crate::camera::PrimaryRays::for_camera(&scene.camera, options.width, options.height);
-        let secondary_rays = traced.secondary();
-        let grid = options.grid.map(|size| match options.visualize_grid {
-            true => GridChoice::Given(voxels::voxel_grid(scene, size, rays.center)),
-            false => GridChoice::Walk(size),
-        });
-        let sampled_rays = options.sampling.is_some();
-        let mut buffers = SceneBuffers::flattened(scene, &rays);
-        if let Some(sampling) = options.sampling {
-            let samples = texture_range::checker_samples_per_pixel(&sampling) as f32;
-            for texture in buffers.textures.iter_mut().filter(|t| t.kind == GpuTexture::CHECKERBOARD) {
-                texture.reach /= samples;
-            }
-        }
+        let mut plan = Plan::new(scene, options, traced.secondary());
+        let mut buffers = flattened(scene, options, &plan.rays);
         let config_for = |buffers: &SceneBuffers, acceleration| {
             let (loop_limit, shared_loads) = (gpu.loop_limit().is_some(), gpu.shares_bin_loads());
             KernelConfig::new(buffers, acceleration, layout, options, &traced, loop_limit, shared_loads)
         };
         // The kernel is compiled (on lavapipe a cost worth hiding even from the shader cache,
-        // docs/performance.md) while this thread builds the
-        // bins or the hierarchy, uploads the scene and fills the first tile's lists. It is
-        // the kernel of the planned way of finding candidates: exact but for bins, whose
-        // lists may turn out too long; then the hierarchy's kernel is compiled here.
-        let planned = buffers.planned_acceleration(&rays, &gpu.options, secondary_rays, sampled_rays, grid.is_some());
-        let planned_config = config_for(&buffers, planned);
-        let prepare = || {
-            buffers.build_acceleration(&rays, &gpu.options, secondary_rays, sampled_rays, grid);
-            let flat = buffers.bins.is_none() && buffers.bvh.is_none() && buffers.grid.is_none();
-            let primitives =
-                buffers.spheres.len() + buffers.ellipsoids.len() + buffers.planes.len() + buffers.triangles.len();
-            if flat && primitives > flatten::LOOP_LIMIT as usize / 2 {
-                return Err(GpuError::TooLarge(format!(
-                    "{primitives} primitives in flat loops (at most {} without bins or a hierarchy)",
-                    flatten::LOOP_LIMIT / 2
-                )));
-            }
-            let tiling = Tiling::new(gpu, scene, options, &layout, buffers.bins.as_ref())?;
-            if let Some(bins) = &mut buffers.bins {
-                bins.finish(&buffers.triangles);
-            }
-            let inputs = upload_inputs(gpu, &buffers)?;
-            // The first tile's lists go straight into slot 0's buffers, and every slot's
-            // buffers are made (and where the host maps them, their pages touched) here
-            // rather than on the way to the first tile.
-            let first_band = buffers.bins.as_ref().map(|bins| {
-                let (first, count) = Bins::rows_holding(0, tiling.first_traced_rows(options));
-                (first, count, bins.band(first, count))
-            });
-            let tile_bytes = options.width as u64 * tiling.tile_rows as u64 * layout.words() as u64 * 4;
-            let sizes = SlotSizes { tile_bytes, sample_bytes: tiling.sample_bytes, band_bytes: tiling.band_bytes };
-            let slots = options.height.div_ceil(tiling.tile_rows).min(2);
-            let slot_buffers: Vec<TileBuffers> = (0..slots)
-                .map(|k| TileBuffers::new(gpu, sizes, first_band.as_ref().filter(|_| k == 0)))
-                .collect::<Result<_, _>>()?;
-            // The plan failed (the bins' lists were too long): the kernel that is needed,
-            // compiled here at once, not after the other.
-            let config = config_for(&buffers, buffers.acceleration());
-            let unplanned = (config != planned_config).then(|| Compiled::new(gpu, config, options, &scene.path));
-            Ok((config, unplanned, tiling, inputs, slot_buffers))
-        };
-        let (planned, prepared) = in_parallel(|| Compiled::new(gpu, planned_config, options, &scene.path), prepare);
-        let (config, unplanned, tiling, inputs, slot_buffers) = prepared?;
-        let Compiled { bindings, pipeline, sampled } = unplanned.unwrap_or(planned)?;
-        let Tiling { tile_rows, band_bytes, .. } = tiling;
+        // docs/performance.md) while this thread builds the bins or the hierarchy, uploads the
+        // scene and fills the first tile's lists. It is the kernel of the planned way of
+        // finding candidates: exact but for bins, whose lists may turn out too long; then the
+        // hierarchy's kernel is compiled by `upload` at once, not after the other.
+        let planned = config_for(&buffers, plan.acceleration(&buffers, &gpu.options));
+        let (compiled, uploaded) = in_parallel(
+            || Compiled::new(gpu, planned, options, &scene.path),
+            || {
+                let uploaded = Uploaded::new(gpu, scene, options, layout, &mut buffers, &mut plan)?;
+                let config = config_for(&buffers, buffers.acceleration());
+                let unplanned = (config != planned).then(|| Compiled::new(gpu, config, options, &scene.path));
+                Ok::<_, GpuError>((config, unplanned, uploaded))
+            },
+        );
+        let (config, unplanned, uploaded) = uploaded?;
+        let compiled = unplanned.unwrap_or(compiled)?;
         let counters = Counters::new(gpu, options.stats);
-        let acceleration = buffers.acceleration();
-        let bins = buffers.bins.take();
-        let slots: Vec<TileSlot> =
-            slot_buffers.into_iter().map(|b| TileSlot::new(gpu, b, &bindings, &inputs, &counters.buffer)).collect();
-        let band_buffer_bytes: u64 = band_bytes.map_or(0, |(r, i)| r + i) * slots.len() as u64;
-        let scene_bytes = inputs.0.iter().flatten().map(|b| b.size()).sum::<u64>() + band_buffer_bytes;
+        let stats = RenderStats {
+            kernel_ns: gpu.timestamps.then_some(0),
+            grid_bounds: options.stats.then(|| buffers.grid_world_bounds(plan.rays.center)).flatten(),
+            ..uploaded.stats(&buffers)
+        };
+        let dispatch = uploaded.dispatch(gpu, compiled, &counters, &mut buffers, config, options, layout);
+        Ok(PreparedScene {
+            dispatch,
+            stats: RenderStats { prepare_ms: start.elapsed().as_secs_f64() * 1e3, ..stats },
+            fallback: (config.loop_canary || config.textures).then(|| scene.clone()),
+            counters,
+        })
+    }
+}
+
+/// What a scene's render casts, and where it finds its candidates.
+struct Plan {
+    rays: crate::camera::PrimaryRays,
+    secondary_rays: bool,
+    sampled_rays: bool,
+    grid: Option<GridChoice>,
+}
+
+impl Plan {
+    fn new(scene: &Scene, options: &RenderOptions, secondary_rays: bool) -> Plan {
+        let rays = crate::camera::PrimaryRays::for_camera(&scene.camera, options.width, options.height);
+        let grid = options.grid.map(|size| match options.visualize_grid {
+            true => GridChoice::Given(voxels::voxel_grid(scene, size, rays.center)),
+            false => GridChoice::Walk(size),
+        });
+        Plan { rays, secondary_rays, sampled_rays: options.sampling.is_some(), grid }
+    }
+
+    /// The way of finding candidates [`Plan::build`] will take (see
+    /// [`SceneBuffers::planned_acceleration`]).
+    fn acceleration(&self, buffers: &SceneBuffers, options: &super::GpuOptions) -> super::Acceleration {
+        buffers.planned_acceleration(&self.rays, options, self.secondary_rays, self.sampled_rays, self.grid.is_some())
+    }
+
+    /// Builds the grid (handed over: built once), the bins or the hierarchy into `buffers`.
+    fn build(&mut self, buffers: &mut SceneBuffers, options: &super::GpuOptions) {
+        buffers.build_acceleration(&self.rays, options, self.secondary_rays, self.sampled_rays, self.grid.take());
+    }
+}
+
+/// The scene as the kernel's buffers, with each checkerboard's reach shared among the
+/// samples of a pixel ([`texture_range::checker_samples_per_pixel`]).
+fn flattened(scene: &Scene, options: &RenderOptions, rays: &crate::camera::PrimaryRays) -> SceneBuffers {
+    let mut buffers = SceneBuffers::flattened(scene, rays);
+    if let Some(sampling) = options.sampling {
+        let samples = texture_range::checker_samples_per_pixel(&sampling) as f32;
+        for texture in buffers.textures.iter_mut().filter(|t| t.kind == GpuTexture::CHECKERBOARD) {
+            texture.reach /= samples;
+        }
+    }
+    buffers
+}
+
+/// A scene's buffers on the device: the inputs, and the buffers of each tile slot.
+struct Uploaded {
+    tiling: Tiling,
+    inputs: Inputs,
+    slot_buffers: Vec<TileBuffers>,
+}
+
+impl Uploaded {
+    /// Builds the acceleration `plan` asks for, checks the flat loops' size, and uploads.
+    fn new(
+        gpu: &GpuRenderer,
+        scene: &Scene,
+        options: &RenderOptions,
+        layout: PixelLayout,
+        buffers: &mut SceneBuffers,
+        plan: &mut Plan,
+    ) -> Result<Uploaded, GpuError> {
+        plan.build(buffers, &gpu.options);
+        let flat = buffers.bins.is_none() && buffers.bvh.is_none() && buffers.grid.is_none();
+        let primitives =
+            buffers.spheres.len() + buffers.ellipsoids.len() + buffers.planes.len() + buffers.triangles.len();
+        if flat && primitives > flatten::LOOP_LIMIT as usize / 2 {
+            return Err(GpuError::TooLarge(format!(
+                "{primitives} primitives in flat loops (at most {} without bins or a hierarchy)",
+                flatten::LOOP_LIMIT / 2
+            )));
+        }
+        let tiling = Tiling::new(gpu, scene, options, &layout, buffers.bins.as_ref())?;
+        if let Some(bins) = &mut buffers.bins {
+            bins.finish(&buffers.triangles);
+        }
+        let inputs = upload_inputs(gpu, buffers)?;
+        // The first tile's lists go straight into slot 0's buffers, and every slot's buffers
+        // are made (and where the host maps them, their pages touched) here rather than on
+        // the way to the first tile.
+        let first_band = buffers.bins.as_ref().map(|bins| {
+            let (first, count) = Bins::rows_holding(0, tiling.first_traced_rows(options));
+            (first, count, bins.band(first, count))
+        });
+        let tile_bytes = options.width as u64 * tiling.tile_rows as u64 * layout.words() as u64 * 4;
+        let sizes = SlotSizes { tile_bytes, sample_bytes: tiling.sample_bytes, band_bytes: tiling.band_bytes };
+        let slots = options.height.div_ceil(tiling.tile_rows).min(2);
+        let slot_buffers = (0..slots)
+            .map(|k| TileBuffers::new(gpu, sizes, first_band.as_ref().filter(|_| k == 0)))
+            .collect::<Result<_, _>>()?;
+        Ok(Uploaded { tiling, inputs, slot_buffers })
+    }
+
+    /// What the preparation cost in memory and in building the acceleration.
+    fn stats(&self, buffers: &SceneBuffers) -> RenderStats {
+        let band_buffer_bytes = self.tiling.band_bytes.map_or(0, |(r, i)| r + i) * self.slot_buffers.len() as u64;
+        let scene_bytes = self.inputs.0.iter().flatten().map(|b| b.size()).sum::<u64>() + band_buffer_bytes;
         let acceleration_build_ms = buffers
             .bvh
             .as_ref()
             .map(|b| b.build_ms)
-            .or(bins.as_ref().map(|b| b.build_ms))
+            .or(buffers.bins.as_ref().map(|b| b.build_ms))
             .or(buffers.grid.as_ref().map(|g| g.build_ms));
-        let dispatch = Dispatch {
+        RenderStats {
+            acceleration_build_ms,
+            scene_bytes,
+            acceleration: buffers.acceleration(),
+            ..RenderStats::default()
+        }
+    }
+
+    /// The tiles' dispatch: each slot bound to the kernel `compiled`, the inputs and the
+    /// counters; the frame's bins taken from `buffers`.
+    #[allow(clippy::too_many_arguments)]
+    fn dispatch<'a>(
+        self,
+        gpu: &'a GpuRenderer,
+        compiled: Compiled,
+        counters: &Counters,
+        buffers: &mut SceneBuffers,
+        config: KernelConfig,
+        options: &RenderOptions,
+        layout: PixelLayout,
+    ) -> Dispatch<'a> {
+        let Compiled { bindings, pipeline, sampled } = compiled;
+        let slots = self
+            .slot_buffers
+            .into_iter()
+            .map(|b| TileSlot::new(gpu, b, &bindings, &self.inputs, &counters.buffer))
+            .collect();
+        Dispatch {
             gpu,
             pipeline,
             sampled,
@@ -141,26 +231,9 @@ impl<'a> PreparedScene<'a> {
             layout,
             params: Params { weight: options.shading.weight as f32, ..buffers.params },
             options: *options,
-            tile_rows,
+            tile_rows: self.tiling.tile_rows,
             slots,
-            bins,
-        };
-        Ok(PreparedScene {
-            dispatch,
-            stats: RenderStats {
-                kernel_ns: gpu.timestamps.then_some(0),
-                tiles: 0,
-                acceleration_build_ms,
-                prepare_ms: start.elapsed().as_secs_f64() * 1e3,
-                scene_bytes,
-                acceleration,
-                pixels_cut_short: 0,
-                pixels_beyond_reach: 0,
-                counted: None,
-                grid_bounds: options.stats.then(|| buffers.grid_world_bounds(rays.center)).flatten(),
-            },
-            fallback: (config.loop_canary || config.textures).then(|| scene.clone()),
-            counters,
-        })
+            bins: buffers.bins.take(),
+        }
     }
 }
