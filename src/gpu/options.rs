@@ -1,8 +1,9 @@
 //! How a [`GpuRenderer`](super::GpuRenderer) renders: the choices its caller makes.
 
-/// The output tile of one dispatch. Small tiles stay in the CPU's caches on lavapipe; below
-/// this size the dispatches multiply (docs/performance.md). It also bounds host memory.
-pub const MAX_TILE_BYTES: u64 = 2 << 20;
+/// The caller's cap on the output tile of one dispatch; the kind of adapter sets a lower one
+/// (`tiles::adapter_tile_bytes`: 1 MiB on lavapipe, 32 MiB on a discrete GPU). It also
+/// bounds host memory.
+pub const MAX_TILE_BYTES: u64 = 32 << 20;
 
 /// Below this many finite primitives the flat loops beat the hierarchy (lavapipe, at 200²:
 /// docs/performance.md).

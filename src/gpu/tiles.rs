@@ -16,10 +16,21 @@ use crate::scene::Scene;
 /// The most bytes of samples one tile holds (the overlap rows of the filter included).
 pub const MAX_SAMPLE_BYTES: u64 = 64 << 20;
 
-/// The output tile on a CPU adapter (lavapipe), where a tile's bins and pixels share the
-/// CPU's caches with the kernel: smaller than [`MAX_TILE_BYTES`](super::MAX_TILE_BYTES) (docs/performance.md).
-/// Real GPUs, unmeasured, keep [`MAX_TILE_BYTES`](super::MAX_TILE_BYTES).
-const CPU_TILE_BYTES: u64 = 1 << 20;
+/// The output tile of one dispatch on each kind of adapter, at most. On a CPU adapter
+/// (lavapipe) a tile's bins and pixels share the CPU's caches with the kernel, and 1 MiB was
+/// measured best (docs/performance.md). A GPU's kernel is a small part of a tile's cost
+/// (a submission, a copy, a map), so it takes a large image in a few large tiles: 32 MiB, 8
+/// tiles of a 8192² 8-bit image, bounds what two tiles in flight hold on the device and in
+/// host memory, and keeps each submission short of an operating system's watchdog (Windows
+/// resets a GPU whose submission runs 2 s: docs/SPEC.md §6). An integrated GPU's memory is
+/// the host's: a quarter of that.
+fn adapter_tile_bytes(device_type: wgpu::DeviceType) -> u64 {
+    match device_type {
+        wgpu::DeviceType::Cpu => 1 << 20,
+        wgpu::DeviceType::IntegratedGpu => 8 << 20,
+        _ => 32 << 20,
+    }
+}
 
 /// How a render is cut into tiles: rows per tile, the bytes of a tile's samples and of its
 /// bins' lists.
@@ -88,18 +99,21 @@ impl Tiling {
 }
 
 /// How many image rows one dispatch renders: as many as fit the adapter's storage
-/// binding limit and our own cap (lower on a CPU adapter), and the dispatch size limit.
+/// binding limit, the tile of its kind of adapter ([`adapter_tile_bytes`]) and the caller's
+/// cap, and the dispatch size limit.
 fn tile_rows(gpu: &GpuRenderer, width: u32, layout: &PixelLayout) -> Result<u32, GpuError> {
-    let row_bytes = width as u64 * layout.words() as u64 * 4;
-    let adapter_budget = gpu.limits.max_storage_buffer_binding_size.min(gpu.limits.max_buffer_size);
-    let max_groups = gpu.limits.max_compute_workgroups_per_dimension as u64;
+    let cap = gpu.options.max_tile_bytes.min(adapter_tile_bytes(gpu.adapter_info.device_type));
+    rows_within(&gpu.limits, cap, width, layout.words())
+}
+
+/// [`tile_rows`] for `width` pixels of `words` words each, at most `cap` bytes a tile.
+fn rows_within(limits: &wgpu::Limits, cap: u64, width: u32, words: u32) -> Result<u32, GpuError> {
+    let row_bytes = width as u64 * words as u64 * 4;
+    let adapter_budget = limits.max_storage_buffer_binding_size.min(limits.max_buffer_size);
+    let max_groups = limits.max_compute_workgroups_per_dimension as u64;
     if row_bytes > adapter_budget || (width as u64).div_ceil(WORKGROUP as u64) > max_groups {
         return Err(GpuError::TooLarge(format!("an image {width} pixels wide exceeds the adapter's limits")));
     }
-    let cap = match gpu.adapter_info.device_type {
-        wgpu::DeviceType::Cpu => gpu.options.max_tile_bytes.min(CPU_TILE_BYTES),
-        _ => gpu.options.max_tile_bytes,
-    };
     let rows = (cap.min(adapter_budget) / row_bytes).max(1);
     // Whole workgroup rows where possible, so no dispatch ends in a half-empty workgroup.
     // Whole workgroups of the largest packet, whichever kernel runs.
@@ -251,4 +265,39 @@ fn band_bytes(bins: &Bins, traced_rows: u32, limit: u64) -> Result<(u64, u64), G
         )));
     }
     Ok((ranges, items))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use wgpu::DeviceType;
+
+    /// Tiles of a `side`² image of `words` words a pixel on `device_type` with `limits`, the
+    /// caller's cap left at its default.
+    fn tiles(device_type: DeviceType, limits: &wgpu::Limits, side: u32, words: u32) -> u32 {
+        let cap = super::super::GpuOptions::default().max_tile_bytes.min(adapter_tile_bytes(device_type));
+        side.div_ceil(rows_within(limits, cap, side, words).unwrap())
+    }
+
+    #[test]
+    fn a_discrete_gpu_takes_a_large_image_in_a_few_large_tiles() {
+        // wgpu's default limits (a 128 MiB binding), which every adapter offers at least.
+        let limits = wgpu::Limits::default();
+        // 8192² with the colour as 8-bit words (what `-output` reads back): 256 MiB in 8.
+        assert_eq!(tiles(DeviceType::DiscreteGpu, &limits, 8192, 1), 8);
+        // lavapipe keeps its 1 MiB tiles: 256 of the same image.
+        assert_eq!(tiles(DeviceType::Cpu, &limits, 8192, 1), 256);
+        assert_eq!(tiles(DeviceType::IntegratedGpu, &limits, 8192, 1), 32);
+    }
+
+    #[test]
+    fn a_tile_stays_within_the_adapters_binding_limit() {
+        let limits = wgpu::Limits { max_storage_buffer_binding_size: 4 << 20, ..wgpu::Limits::default() };
+        let rows = rows_within(&limits, 32 << 20, 8192, 8).unwrap();
+        assert!(rows as u64 * 8192 * 8 * 4 <= 4 << 20, "{rows} rows");
+        assert!(rows >= 1);
+        // A row wider than the binding is refused by name, not cut.
+        let refused = rows_within(&limits, 32 << 20, 1 << 16, 32).unwrap_err();
+        assert!(refused.to_string().contains("65536 pixels wide exceeds the adapter's limits"), "{refused}");
+    }
 }
