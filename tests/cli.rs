@@ -296,6 +296,8 @@ fn bench_quick_writes_table_csv_and_plot() {
         let samples: usize = row[column("samples")].parse().unwrap();
         assert!(mrays > 0.0 && mrays.is_finite(), "{row:?}");
         assert!(samples > 0 && off <= 0.001, "{row:?}");
+        let warm: f64 = row[column("warm_frame_ms")].parse().unwrap();
+        assert!(warm > 0.0 && warm.is_finite(), "{row:?}");
     }
     let png = std::fs::read(dir.path().join("bench.png")).unwrap();
     assert_eq!(&png[1..4], b"PNG");

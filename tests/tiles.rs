@@ -56,6 +56,36 @@ fn awaited_tiles_equal_threaded_ones() {
     assert_eq!(frame, small.render(&scene(), &options).unwrap());
 }
 
+/// A warm frame (the live view's and the bench's): a scene prepared once renders again and
+/// again with its buffers, bins and kernel, each frame the same floats as a fresh render,
+/// in tiles of 3 rows and with bins, whose slots then hold other bands than the first.
+#[test]
+fn a_prepared_scene_renders_the_same_frame_again() {
+    if common::gpu().is_none() {
+        return;
+    }
+    let options = RenderOptions::all(37, 23);
+    let whole = common::gpu().unwrap().render(&lattice(), &options).unwrap();
+    let binned = common::gpu().unwrap().on_same_device(GpuOptions {
+        acceleration: raycaster::gpu::Acceleration::Bins,
+        max_tile_bytes: 37 * 3 * 32,
+        ..GpuOptions::default()
+    });
+    let prepared = binned.prepare(&lattice(), &options, false).unwrap();
+    for frame_number in 0..3 {
+        let mut frame = raycaster::render::Frame::new(&options);
+        let stats = prepared
+            .render(|tile| {
+                frame.paste(tile.first_row, &tile.to_frame());
+                Ok::<(), raycaster::gpu::GpuError>(())
+            })
+            .unwrap();
+        assert_eq!(stats.tiles, 8);
+        assert_eq!(stats.acceleration, raycaster::gpu::Acceleration::Bins);
+        assert_eq!(frame, whole, "frame {frame_number}");
+    }
+}
+
 /// Where the host maps the kernel's buffers (a CPU adapter: the first tile's bin lists
 /// written while the kernel compiles, each tile read from the output buffer itself), the
 /// tiles hold what copying through staging and readback buffers gives, as on a discrete

@@ -82,6 +82,9 @@ pub struct Row {
     pub timestamps: bool,
     /// Median wall time of the whole render (flatten, upload, kernel, read-back).
     pub wall_ms: f64,
+    /// A warm frame: the scene prepared once, rendered again and read into host memory as
+    /// floats ([`warm_frame_ms`]).
+    pub warm_ms: f64,
     pub runs: usize,
     /// Peak resident memory of the process during the case (Linux only).
     pub peak_mib: Option<f64>,
@@ -190,6 +193,7 @@ pub fn run_case(gpu: &GpuRenderer, case: &Case, runs: usize) -> Result<Row, GpuE
         scene_bytes = stats.scene_bytes;
         kernel.push(stats.kernel_ns.map_or(elapsed, |ns| ns as f64 / 1e6));
     }
+    let warm_ms = warm_frame_ms(gpu, &case.scene, &options, runs)?;
     let peak_mib = memory::peak_mib();
     let positions: Vec<(u32, u32)> = gpu_samples.iter().map(|s: &Sample| s.position).collect();
     let reference_renderer = Reference::new(&case.scene, &reference_options);
@@ -213,6 +217,7 @@ pub fn run_case(gpu: &GpuRenderer, case: &Case, runs: usize) -> Result<Row, GpuE
         kernel_ms: median(&mut kernel),
         timestamps,
         wall_ms: median(&mut wall),
+        warm_ms,
         runs: runs.max(1),
         peak_mib,
         samples: positions.len(),
@@ -220,6 +225,27 @@ pub fn run_case(gpu: &GpuRenderer, case: &Case, runs: usize) -> Result<Row, GpuE
         rays,
         reference_ms,
     })
+}
+
+/// The median of `runs` warm frames (after one thrown away): `scene` prepared once (its
+/// buffers, bins or hierarchy, and kernel), then rendered again and again, each frame's tiles
+/// read into one host frame of floats. What a live view pays for a frame that changes no
+/// buffer, and what Mitsuba 3 calls a warm frame (docs/performance.md).
+pub fn warm_frame_ms(gpu: &GpuRenderer, scene: &Scene, options: &RenderOptions, runs: usize) -> Result<f64, GpuError> {
+    let prepared = gpu.prepare(scene, options, false)?;
+    let mut times = Vec::new();
+    for run in 0..=runs.max(1) {
+        let start = Instant::now();
+        let mut frame = Frame::new(options);
+        prepared.render(|tile| {
+            frame.paste(tile.first_row, &tile.to_frame());
+            Ok::<(), GpuError>(())
+        })?;
+        if run > 0 {
+            times.push(start.elapsed().as_secs_f64() * 1e3);
+        }
+    }
+    Ok(median(&mut times))
 }
 
 /// How many pixels to check against the reference: the reference tests every triangle of a
@@ -511,13 +537,13 @@ pub fn markdown(rows: &[Row], adapter: &str) -> String {
         rows.first().map_or(0, |r| r.runs)
     );
     out.push_str(
-        "| scene | triangle test | candidates from | primitives | pixels | build ms | kernel ms | wall ms | rays/pixel | Mrays/s | reference Mrays/s | scene MiB | peak MiB | samples | >1 level | hit/miss | depth rel. max | normal max (rad) |\n\
-         | --- | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n",
+        "| scene | triangle test | candidates from | primitives | pixels | build ms | kernel ms | wall ms | warm frame ms | rays/pixel | Mrays/s | reference Mrays/s | scene MiB | peak MiB | samples | >1 level | hit/miss | depth rel. max | normal max (rad) |\n\
+         | --- | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n",
     );
     for r in rows {
         let _ = writeln!(
             out,
-            "| {} | {} | {} | {} | {}² | {} | {:.2} | {:.1} | {:.2} | {:.1} | {} | {:.2} | {} | {} | {:.3}% | {} | {:.1e} | {:.1e} |",
+            "| {} | {} | {} | {} | {}² | {} | {:.2} | {:.1} | {:.2} | {:.2} | {:.1} | {} | {:.2} | {} | {} | {:.3}% | {} | {:.1e} | {:.1e} |",
             r.name,
             r.triangle_test.name(),
             r.acceleration.name(),
@@ -526,6 +552,7 @@ pub fn markdown(rows: &[Row], adapter: &str) -> String {
             r.acceleration_build_ms.map_or("-".to_string(), |ms| format!("{ms:.1}")),
             r.kernel_ms,
             r.wall_ms,
+            r.warm_ms,
             r.rays as f64 / r.pixels() as f64,
             r.mrays_per_s(),
             r.reference_mrays_per_s().map_or("-".to_string(), |m| format!("{m:.2}")),
@@ -543,11 +570,11 @@ pub fn markdown(rows: &[Row], adapter: &str) -> String {
 
 /// The rows as CSV, one line each.
 pub fn csv(rows: &[Row]) -> String {
-    let mut out = String::from("scene,triangle_test,acceleration,primitives,triangles,width,height,acceleration_build_ms,scene_bytes,kernel_ms,kernel_from_timestamps,wall_ms,rays,mrays_per_s,reference_ms,peak_mib,samples,off_by_more_than_one_fraction,hit_mismatches,depth_rel_max,normal_angle_max_rad,color_float_max\n");
+    let mut out = String::from("scene,triangle_test,acceleration,primitives,triangles,width,height,acceleration_build_ms,scene_bytes,kernel_ms,kernel_from_timestamps,wall_ms,warm_frame_ms,rays,mrays_per_s,reference_ms,peak_mib,samples,off_by_more_than_one_fraction,hit_mismatches,depth_rel_max,normal_angle_max_rad,color_float_max\n");
     for r in rows {
         let _ = writeln!(
             out,
-            "{},{},{},{},{},{},{},{},{},{:.4},{},{:.3},{},{:.3},{},{},{},{:.6},{},{:.3e},{:.3e},{:.3e}",
+            "{},{},{},{},{},{},{},{},{},{:.4},{},{:.3},{:.3},{},{:.3},{},{},{},{:.6},{},{:.3e},{:.3e},{:.3e}",
             r.name,
             r.triangle_test.name(),
             r.acceleration.name(),
@@ -560,6 +587,7 @@ pub fn csv(rows: &[Row]) -> String {
             r.kernel_ms,
             r.timestamps,
             r.wall_ms,
+            r.warm_ms,
             r.rays,
             r.mrays_per_s(),
             r.reference_ms.map_or(String::new(), |ms| format!("{ms:.3}")),
