@@ -137,6 +137,15 @@ impl Report {
                 args.triangle_test.name(),
                 args.sphere_test.name()
             ));
+            if let Some(cache) = backend.gpu().and_then(|gpu| gpu.pipeline_cache()) {
+                let (file, read, written) = cache.describe();
+                lines.push(format!(
+                    "pipeline cache: {} ({:.1} KiB read, {:.1} KiB written)",
+                    file.display(),
+                    read as f64 / 1024.0,
+                    written as f64 / 1024.0
+                ));
+            }
             if raycaster::gpu::fuse::requested() {
                 lines.push(format!(
                     "fused mode ({}=1): every multiply-add, dot and cross of the kernel fused, in f64",

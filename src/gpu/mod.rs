@@ -29,6 +29,7 @@ pub mod layout;
 mod oneshot;
 mod options;
 mod parallel;
+pub mod pipeline_cache;
 pub mod precision;
 mod precision_error;
 mod prepared;

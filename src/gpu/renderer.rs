@@ -5,12 +5,13 @@ use super::bindings::{self, Binding, BindingSet};
 use super::error::GpuError;
 use super::kernel::{KernelConfig, Stage};
 use super::options::GpuOptions;
+use super::pipeline_cache::PipelineCache;
 use super::unsupported::UnsupportedError;
 use super::{binning, flatten, fuse, specialise};
 use crate::render::RenderOptions;
 use crate::sampling::Sampling;
 use std::collections::HashMap;
-use std::sync::Mutex;
+use std::sync::{Arc, Mutex};
 
 /// Kernels a renderer keeps compiled (see [`GpuRenderer::pipeline`]).
 const MAX_CACHED_PIPELINES: usize = 32;
@@ -27,6 +28,9 @@ pub struct GpuRenderer {
     /// ([`bindings`]).
     all_bindings: Option<BindingSet>,
     pipelines: Mutex<HashMap<(KernelConfig, u32), wgpu::ComputePipeline>>,
+    /// The kernels compiled by earlier processes, where the adapter keeps them
+    /// ([`super::pipeline_cache`]); shared by the renderers on one device.
+    pipeline_cache: Option<Arc<PipelineCache>>,
     pub(super) options: GpuOptions,
     pub(super) timestamps: bool,
 }
@@ -78,7 +82,8 @@ impl GpuRenderer {
         // (GpuRenderer::shares_bin_loads). Buffers the kernel binds that the host also maps,
         // where the device's memory is the host's (a CPU adapter): no staging copies
         // (GpuRenderer::maps_kernel_buffers).
-        let mut wanted = wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::SUBGROUP;
+        // Compiled kernels kept between processes where the adapter offers it (Vulkan).
+        let mut wanted = wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::SUBGROUP | wgpu::Features::PIPELINE_CACHE;
         if adapter.get_info().device_type == wgpu::DeviceType::Cpu {
             wanted |= wgpu::Features::MAPPABLE_PRIMARY_BUFFERS;
         }
@@ -114,6 +119,17 @@ impl GpuRenderer {
         queue: wgpu::Queue,
         options: GpuOptions,
     ) -> GpuRenderer {
+        let cache = PipelineCache::open(&device, &adapter_info).map(Arc::new);
+        Self::sharing_cache(adapter_info, device, queue, options, cache)
+    }
+
+    fn sharing_cache(
+        adapter_info: wgpu::AdapterInfo,
+        device: wgpu::Device,
+        queue: wgpu::Queue,
+        options: GpuOptions,
+        pipeline_cache: Option<Arc<PipelineCache>>,
+    ) -> GpuRenderer {
         let all = device.limits().max_storage_buffers_per_shader_stage >= Binding::ALL.len() as u32;
         let all_bindings = all.then(|| BindingSet::new(&device, BindingSet::ALL));
         GpuRenderer {
@@ -124,6 +140,7 @@ impl GpuRenderer {
             adapter_info,
             all_bindings,
             pipelines: Mutex::new(HashMap::new()),
+            pipeline_cache,
             options,
         }
     }
@@ -131,7 +148,13 @@ impl GpuRenderer {
     /// Another renderer on this one's device and queue, rendering as `options` say (opens
     /// no second device).
     pub fn on_same_device(&self, options: GpuOptions) -> GpuRenderer {
-        Self::with_device(self.adapter_info.clone(), self.device.clone(), self.queue.clone(), options)
+        let (info, device, queue) = (self.adapter_info.clone(), self.device.clone(), self.queue.clone());
+        Self::sharing_cache(info, device, queue, options, self.pipeline_cache.clone())
+    }
+
+    /// The pipeline cache kept between processes, where the adapter offers one.
+    pub fn pipeline_cache(&self) -> Option<&PipelineCache> {
+        self.pipeline_cache.as_deref()
     }
 
     /// The device and queue, for a caller that shows what it renders (the live view of
@@ -228,8 +251,11 @@ impl GpuRenderer {
                 constants: &[],
                 zero_initialize_workgroup_memory: false,
             },
-            cache: None,
+            cache: self.pipeline_cache.as_ref().map(|c| &c.cache),
         });
+        if let Some(kept) = &self.pipeline_cache {
+            kept.save();
+        }
         let mut cache = cache();
         // A compiled kernel holds megabytes on lavapipe; a process that renders many kinds
         // of scene (the random-scene test: hundreds) starts over rather than keep them all.
