@@ -43,11 +43,11 @@ override SPECULAR: bool = false;
 override SPECULAR_FIX: bool = false;
 override POINT_LIGHTS: bool = false;
 override SHADOWS: bool = false;
-// The ray tree (shaders/tree.wgsl): reflected and refracted rays at most BOUNCES deep (the
-// host's -bounces, lowered to the depth the materials' weights can reach, below
-// TREE_STACK), none whose weight falls below Params.weight (-weight, a value of the
-// parameters, not an override, so that a new weight compiles no new kernel).
-override BOUNCES: u32 = 0u;
+// The ray tree (shaders/tree.wgsl): reflected and refracted rays at most Params.bounces deep
+// (the host's -bounces, lowered to the depth the materials' weights can reach, below
+// TREE_STACK), none whose weight falls below Params.weight (-weight). Both are values of the
+// parameters, not overrides, so that a new depth or weight compiles no new kernel.
+override TREE: bool = false;
 // Whether to check, after each pixel, that the driver did not cut its loops short
 // (loops_were_cut in shaders/entry.wgsl): on drivers with a loop limit, where a ray tree
 // could reach it.
@@ -118,7 +118,8 @@ struct Params {
     // Always 0: or-ed into products whose rounding must not be the compiler's choice
     // (shaders/exact.wgsl), from the buffer so that no compiler can see it is 0.
     zero_bits: u32,
-    _pad0: u32,
+    // The ray tree's depth (TREE): reflections and refractions on a path, at most.
+    bounces: u32,
     _pad1: u32,
     _pad2: u32,
 }

@@ -71,7 +71,7 @@ fn refraction(d: vec3<f32>, n: vec3<f32>, index_from: f32, index_to: f32) -> vec
 // deeper: its material's, or those of each material a solid texture blends there, by
 // its share (docs/SPEC.md §5).
 fn push_children(surface: Surface, node: Pending) {
-    if (node.bounces >= BOUNCES || is_black(surface, node.ray)) {
+    if (node.bounces >= P.bounces || is_black(surface, node.ray)) {
         return;
     }
     if (TEXTURES && textures[surface.material].kind != 0u) {
@@ -108,10 +108,10 @@ fn push_material_children(surface: Surface, node: Pending, material: Material, s
 }
 
 // The colour seen along a primary ray that hit `surface`: its own shading, then every ray of
-// its tree (with BOUNCES = 0, the shading alone).
+// its tree (without TREE, the shading alone).
 fn color_of_tree(surface: Surface, ray: Ray) -> vec3<f32> {
     var color = shade(surface, ray);
-    if (BOUNCES == 0u) {
+    if (!TREE) {
         return color;
     }
     pending_len = 0u;

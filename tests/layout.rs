@@ -81,6 +81,7 @@ fn host_structs_match_the_shader() {
             ("grid_cell", offset_of!(Params, grid_cell)),
             ("first_bin_row", offset_of!(Params, first_bin_row)),
             ("zero_bits", offset_of!(Params, zero_bits)),
+            ("bounces", offset_of!(Params, bounces)),
         ],
     );
     check(
@@ -264,7 +265,7 @@ fn override_constants_match_the_host() {
         specular_fix: true,
         point_lights: true,
         shadows: true,
-        bounces: 3,
+        tree: true,
         loop_canary: true,
         triangle_test: TriangleTest::Watertight,
         sphere_test: SphereTest::Robust,

@@ -34,8 +34,10 @@ pub struct KernelConfig {
     pub point_lights: bool,
     /// Shadow rays ([`RenderRays::shadows`]).
     pub shadows: bool,
-    /// The ray tree's depth ([`TreeShape::depth`](super::ray_tree::TreeShape::depth)).
-    pub bounces: u32,
+    /// A ray tree is traced: its depth ([`TreeShape::depth`](super::ray_tree::TreeShape::depth))
+    /// is not part of the kernel but of its parameters (`Params::bounces`), so the lines that
+    /// differ only in `-bounces` share one kernel.
+    pub tree: bool,
     /// Check every pixel for loops the driver cut short ([`GpuRenderer::loop_limit`](super::GpuRenderer::loop_limit)).
     pub loop_canary: bool,
     pub triangle_test: TriangleTest,
@@ -99,7 +101,7 @@ impl KernelConfig {
             specular_fix: specular && shading.specular_fix,
             point_lights: buffers.lights.iter().any(|l| l.is_point != 0),
             shadows: rays.shadows,
-            bounces: rays.tree.depth,
+            tree: rays.tree.depth > 0,
             loop_canary: false,
             triangle_test: options.triangle_test,
             sphere_test: options.sphere_test,
@@ -150,7 +152,7 @@ impl KernelConfig {
 
     /// Whether rays other than primary ones are traced (shadow, reflected, refracted).
     pub fn secondary_rays(&self) -> bool {
-        self.shadows || self.bounces > 0
+        self.shadows || self.tree
     }
 
     /// The values for `PipelineCompilationOptions::constants`.
@@ -174,7 +176,7 @@ impl KernelConfig {
             ("SPECULAR_FIX", b(self.specular_fix)),
             ("POINT_LIGHTS", b(self.point_lights)),
             ("SHADOWS", b(self.shadows)),
-            ("BOUNCES", self.bounces as f64),
+            ("TREE", b(self.tree)),
             ("LOOP_CANARY", b(self.loop_canary)),
             ("TRIANGLE_TEST", self.triangle_test as u32 as f64),
             ("SPHERE_TEST", self.sphere_test as u32 as f64),

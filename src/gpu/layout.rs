@@ -42,7 +42,9 @@ pub struct Params {
     /// Always 0: the kernel ors it into products whose rounding no compiler may choose
     /// (shaders/exact.wgsl).
     pub zero_bits: u32,
-    pub _pad0: u32,
+    /// The ray tree's depth ([`TreeShape::depth`](super::ray_tree::TreeShape::depth)), with
+    /// the kernel's `TREE`: a value, so that each depth compiles no kernel of its own.
+    pub bounces: u32,
     pub _pad1: u32,
     pub _pad2: u32,
 }

@@ -85,7 +85,8 @@ impl<'a> PreparedScene<'a> {
             grid_bounds: options.stats.then(|| buffers.grid_world_bounds(plan.rays.center)).flatten(),
             ..uploaded.stats(&buffers)
         };
-        let dispatch = uploaded.dispatch(gpu, compiled, &counters, &mut buffers, config, options, layout);
+        let mut dispatch = uploaded.dispatch(gpu, compiled, &counters, &mut buffers, config, options, layout);
+        dispatch.params.bounces = traced.tree.depth;
         Ok(PreparedScene {
             dispatch,
             stats: RenderStats { prepare_ms: start.elapsed().as_secs_f64() * 1e3, ..stats },

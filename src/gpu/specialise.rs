@@ -1,6 +1,6 @@
 //! One kernel per [`KernelConfig`](super::KernelConfig), cut down before the driver sees
 //! it. The kernel is one WGSL module whose features hang on `override` switches
-//! (`if (TEXTURES && …)`, `if (BOUNCES == 0u)`). Handed to wgpu as it is, with the
+//! (`if (TEXTURES && …)`, `if (!TREE)`). Handed to wgpu as it is, with the
 //! switches as pipeline constants, every feature's code still reaches the driver behind a
 //! branch that never runs, and lavapipe inlines and optimises all of it before it finds
 //! out: a small render spent most of its time preparing its kernel, in lavapipe's own
@@ -256,7 +256,7 @@ fn cut_decided_branches(block: &mut Block, exprs: &naga::Arena<Expression>, know
         let ends = always_leaves(&statement);
         block.push(statement, span);
         if ends {
-            // What follows a return never runs (`if (BOUNCES == 0u) { return color; }`
+            // What follows a return never runs (`if (!TREE) { return color; }`
             // leaves the rest of the tree's code behind its cut branch).
             break;
         }
@@ -359,7 +359,7 @@ mod tests {
             assert!(!has(&plain, feature_function), "{feature_function} in a kernel without its feature");
         }
         assert!(has(&specialise(module, &with("TEXTURES"), "main"), "improved_noise"));
-        assert!(has(&specialise(module, &with("BOUNCES"), "main"), "pop_pending"));
+        assert!(has(&specialise(module, &with("TREE"), "main"), "pop_pending"));
         assert!(has(&specialise(module, &with("USE_GRID"), "main"), "grid_closest"));
         assert!(function_names(&plain).len() * 3 < function_names(module).len(), "{:?}", function_names(&plain));
     }
