@@ -29,10 +29,15 @@ fn the_python_package_built_as_a_wheel_passes_its_tests() {
     step(Command::new(bin.join("python")).args(["-m", "pip", "install", "-q", "-r"]).arg(&requirements));
 
     let wheels = work.join("wheels");
+    // In this build's target folder: the dependencies the binary compiled (wgpu, naga...) are
+    // compiled once for both.
+    let target = Path::new(env!("CARGO_TARGET_TMPDIR")).parent().expect("target/tmp is in the target folder");
     step(
         Command::new(bin.join("maturin"))
             .args(["build", "--release", "--manifest-path"])
             .arg(repository.join("python/Cargo.toml"))
+            .arg("--target-dir")
+            .arg(target)
             .arg("--out")
             .arg(&wheels),
     );
