@@ -176,11 +176,23 @@ impl Renderer {
     /// Renders `scene` whole, into float buffers, with whoever [`Renderer::for_scene`] picks.
     #[cfg(not(target_arch = "wasm32"))]
     pub fn render(&self, scene: &Scene, options: &RenderOptions) -> Result<Rendered, GpuError> {
+        self.render_or_stop(scene, options, || Ok(()))
+    }
+
+    /// [`Renderer::render`], asking `go_on` after each tile whether to go on: its error stops
+    /// the render there and is returned (the Python package's Ctrl-C, seen between tiles).
+    #[cfg(not(target_arch = "wasm32"))]
+    pub fn render_or_stop<E: From<GpuError>>(
+        &self,
+        scene: &Scene,
+        options: &RenderOptions,
+        mut go_on: impl FnMut() -> Result<(), E>,
+    ) -> Result<Rendered, E> {
         let (renderer, handed_over) = self.for_scene(scene, options);
         let mut frame = Frame::new(options);
         let (stats, notice) = renderer.render_band(scene, options, 0, options.height, |first_row, tile| {
             frame.paste(first_row, &tile);
-            Ok::<(), GpuError>(())
+            go_on()
         })?;
         let backend = match &notice {
             Some(_) => REFERENCE.describe(),

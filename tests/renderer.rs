@@ -89,3 +89,26 @@ fn a_gpu_failure_the_reference_cannot_mend_has_no_fallback() {
     let lost = raycaster::gpu::GpuError::NoAdapter("none in this test".into());
     assert_eq!(fallback_notice(&lost), None);
 }
+
+/// What the caller's `go_on` says between tiles: an error stops the render after that tile
+/// and comes back as it is; `Ok` all along is `render` itself.
+#[test]
+fn render_or_stop_stops_where_the_caller_says() {
+    let scene = sphere_at(1.0);
+    // 600² pixels: more than one of the reference's tiles (2^18 pixels each, src/renderer/bands.rs).
+    let options = RenderOptions::all(600, 600);
+    let reference = Renderer::reference();
+    let mut asked = 0;
+    let stopped = reference.render_or_stop(&scene, &options, || {
+        asked += 1;
+        Err(raycaster::gpu::GpuError::NoAdapter("stopped by the test".into()))
+    });
+    assert!(matches!(stopped, Err(raycaster::gpu::GpuError::NoAdapter(why)) if why == "stopped by the test"));
+    assert_eq!(asked, 1, "asked after the first tile, and not again");
+
+    let mut tiles = 0;
+    let whole = reference.render_or_stop(&scene, &options, || Ok::<(), raycaster::gpu::GpuError>(tiles += 1)).unwrap();
+    assert!(tiles > 1, "{tiles} tiles");
+    assert_eq!(whole.stats.tiles, tiles);
+    assert_eq!(whole.frame, raycaster::cpu::render(&scene, &options));
+}

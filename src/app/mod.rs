@@ -1,6 +1,8 @@
 //! The `raycaster` command's own layer over the library, which renders through
 //! [`raycaster::renderer::Renderer`]. Nothing here is part of the library's API. Modules import only from the layers below their own:
 //!
+//! 0. [`command`]: one command line dispatched to the layers below (the binary's `main`, and
+//!    the Python package's `raycaster.run`), and the process's settings for Mesa's drivers;
 //! 1. [`exit`]: how the command ends; [`signals`]: interrupts, ending through [`exit`];
 //! 2. [`window`]: `-gui`'s live view, over [`job`];
 //!    [`job`]: one command line's render, `compare`'s, and batches; [`stitch`]: assembling
@@ -17,6 +19,7 @@
 pub mod args;
 pub mod bench;
 pub mod cli;
+pub mod command;
 pub mod exit;
 pub mod flags;
 pub mod gallery;
