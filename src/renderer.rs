@@ -173,6 +173,17 @@ impl Renderer {
         }
     }
 
+    /// Compiles the GPU kernel of a render to come, where this renderer would render it
+    /// on the GPU ([`Renderer::for_scene`]; `packed`: 8-bit images, else floats), so that a
+    /// batch compiles the next line's kernel while it renders this one. What the GPU would
+    /// refuse is left for the render to refuse (or hand over).
+    #[cfg(not(target_arch = "wasm32"))]
+    pub fn precompile(&self, scene: &Scene, options: &RenderOptions, packed: bool) {
+        if let (Renderer::Gpu(gpu, _), None) = (self, self.for_scene(scene, options).1) {
+            let _ = gpu.precompile(scene, options, packed);
+        }
+    }
+
     /// Renders `scene` whole, into float buffers, with whoever [`Renderer::for_scene`] picks.
     #[cfg(not(target_arch = "wasm32"))]
     pub fn render(&self, scene: &Scene, options: &RenderOptions) -> Result<Rendered, GpuError> {

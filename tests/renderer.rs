@@ -112,3 +112,33 @@ fn render_or_stop_stops_where_the_caller_says() {
     assert_eq!(whole.stats.tiles, tiles);
     assert_eq!(whole.frame, raycaster::cpu::render(&scene, &options));
 }
+
+/// A batch compiles the next line's kernel while it renders this one: the render then finds
+/// it compiled, and two threads asking for one kernel at once compile it once.
+#[test]
+fn a_kernel_compiled_ahead_is_compiled_once() {
+    let Some(gpu) = common::gpu().map(|g| g.on_same_device(GpuOptions::default())) else { return };
+    let scene = sphere_at(1.0);
+    let options = RenderOptions {
+        outputs: raycaster::render::Outputs::from(raycaster::render::Output::Normals),
+        ..RenderOptions::all(90, 70)
+    };
+    gpu.precompile(&scene, &options, true).unwrap();
+    assert_eq!(gpu.kernels_compiled(), 1);
+    gpu.prepare(&scene, &options, true).unwrap();
+    assert_eq!(gpu.kernels_compiled(), 1, "the render found the kernel compiled ahead");
+    let wider =
+        RenderOptions { shading: raycaster::render::Shading { shade_back: true, ..options.shading }, ..options };
+    std::thread::scope(|scope| {
+        scope.spawn(|| gpu.precompile(&scene, &wider, true).unwrap());
+        scope.spawn(|| gpu.prepare(&scene, &wider, true).map(drop).unwrap());
+    });
+    assert_eq!(gpu.kernels_compiled(), 2, "one kernel more, compiled by one of the two threads");
+    // Ahead of a render the reference would take (`auto` on a CPU device, a small tree), the
+    // renderer compiles nothing.
+    let on_cpu = gpu.adapter_info().device_type == wgpu::DeviceType::Cpu;
+    let auto = Renderer::on_gpu(gpu.on_same_device(GpuOptions::default()), BackendChoice::Auto);
+    let tree = RenderOptions { shading: raycaster::render::Shading { shadows: true, ..options.shading }, ..options };
+    auto.precompile(&scene, &tree, true);
+    assert_eq!(auto.gpu().unwrap().kernels_compiled(), usize::from(!on_cpu));
+}

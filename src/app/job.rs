@@ -252,7 +252,7 @@ pub fn render_scene(
     let (stats, notice) = if outputs.is_empty() {
         // Only the course's pictures (`-render_samples`, `-render_filter`): no image.
         (RenderStats::default(), None)
-    } else if outputs.iter().any(|o| o.format == ImageFormat::Exr) {
+    } else if reads_floats(&outputs) {
         // Floats leave the backend as they are, for the EXR files.
         backend.render_band(scene, &options, band.0, band.1, |_first_row, tile| {
             write(tile.height, &mut |o| o.pixels(&tile))
@@ -508,45 +508,79 @@ pub fn run_batch(
     let mut count = BatchCount::default();
     // The course's own commands.txt has -gui on every line: say it once.
     let mut preview_told = false;
-    for (line_number, line) in lines {
-        let words: Vec<&str> = line.split_whitespace().collect();
-        count.run += 1;
-        let failure = match cli::parse_args(&words).and_then(|c| validate::check(&c).map(|()| c)) {
-            Ok(Command::Render(args)) if !args.writes_something() => {
-                let notice = preview_notice(&args, BATCH_OPENS_NO_WINDOW).expect("-gui, with nothing to write");
-                tell(line_number, LineReport::Notice(notice));
-                None
+    std::thread::scope(|scope| {
+        let (starting, started) = std::sync::mpsc::channel::<usize>();
+        let upcoming = &lines;
+        // The kernel of the line after the one starting, compiled while that one renders (the
+        // next line's render finds it compiled, or waits for it: docs/SPEC.md §6).
+        scope.spawn(move || {
+            while let Ok(mut k) = started.recv() {
+                k = started.try_iter().last().unwrap_or(k);
+                if let Some(&(_, line)) = upcoming.get(k + 1) {
+                    precompile_line(line, backend);
+                }
             }
-            Ok(Command::Render(args)) => match run(&args, backend, false) {
-                Ok(done) => {
-                    let ms = done.parse_ms + done.render_ms + done.write_ms;
-                    if let Some(notice) = preview_notice(&args, BATCH_OPENS_NO_WINDOW).filter(|_| !preview_told) {
-                        preview_told = true;
-                        tell(line_number, LineReport::Notice(notice));
-                    }
-                    done.warnings.into_iter().for_each(|w| tell(line_number, LineReport::Warning(w)));
-                    if let Some(fallback) = done.notice.clone() {
-                        tell(line_number, LineReport::Fallback(fallback));
-                    }
-                    if args.stats {
-                        let seconds = (done.render_ms + done.write_ms) / 1e3;
-                        tell(line_number, LineReport::Stats(stats_text(&args, &done.stats, seconds)));
-                    }
-                    tell(line_number, LineReport::Rendered { ms, by_reference: done.handed_over.is_some() });
+        });
+        for (k, &(line_number, line)) in lines.iter().enumerate() {
+            let _ = starting.send(k);
+            let words: Vec<&str> = line.split_whitespace().collect();
+            count.run += 1;
+            let failure = match cli::parse_args(&words).and_then(|c| validate::check(&c).map(|()| c)) {
+                Ok(Command::Render(args)) if !args.writes_something() => {
+                    let notice = preview_notice(&args, BATCH_OPENS_NO_WINDOW).expect("-gui, with nothing to write");
+                    tell(line_number, LineReport::Notice(notice));
                     None
                 }
-                Err(e) => Some(e.to_string()),
-            },
-            Ok(_) => Some("only render command lines can be batched".into()),
-            Err(e) => Some(e.0),
-        };
-        if let Some(failure) = failure {
-            count.failed += 1;
-            tell(line_number, LineReport::Failure(failure));
+                Ok(Command::Render(args)) => match run(&args, backend, false) {
+                    Ok(done) => {
+                        let ms = done.parse_ms + done.render_ms + done.write_ms;
+                        if let Some(notice) = preview_notice(&args, BATCH_OPENS_NO_WINDOW).filter(|_| !preview_told) {
+                            preview_told = true;
+                            tell(line_number, LineReport::Notice(notice));
+                        }
+                        done.warnings.into_iter().for_each(|w| tell(line_number, LineReport::Warning(w)));
+                        if let Some(fallback) = done.notice.clone() {
+                            tell(line_number, LineReport::Fallback(fallback));
+                        }
+                        if args.stats {
+                            let seconds = (done.render_ms + done.write_ms) / 1e3;
+                            tell(line_number, LineReport::Stats(stats_text(&args, &done.stats, seconds)));
+                        }
+                        tell(line_number, LineReport::Rendered { ms, by_reference: done.handed_over.is_some() });
+                        None
+                    }
+                    Err(e) => Some(e.to_string()),
+                },
+                Ok(_) => Some("only render command lines can be batched".into()),
+                Err(e) => Some(e.0),
+            };
+            if let Some(failure) = failure {
+                count.failed += 1;
+                tell(line_number, LineReport::Failure(failure));
+            }
+            bar.advance(1);
         }
-        bar.advance(1);
-    }
+    });
     count
+}
+
+/// Compiles the GPU kernel a batch's `line` will need, where it is a render the GPU would
+/// run ([`Renderer::precompile`]); a line that does not parse or load is left for its turn
+/// to report.
+fn precompile_line(line: &str, backend: &Renderer) {
+    let words: Vec<&str> = line.split_whitespace().collect();
+    let Ok(Command::Render(args)) = cli::parse_args(&words) else { return };
+    if !args.writes_something() {
+        return;
+    }
+    let Ok((scene, _)) = load(&args) else { return };
+    backend.precompile(&scene, &options_for(&args), !reads_floats(&OutputFile::list(&args.files)));
+}
+
+/// Whether a render writing `outputs` reads floats back (an EXR file among them), else 8-bit
+/// images the kernel quantises.
+fn reads_floats(outputs: &[OutputFile]) -> bool {
+    outputs.iter().any(|o| o.format == ImageFormat::Exr)
 }
 
 #[cfg(test)]

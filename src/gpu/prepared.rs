@@ -37,6 +37,20 @@ pub struct PreparedScene<'a> {
 }
 
 impl GpuRenderer {
+    /// Compiles the kernel [`GpuRenderer::prepare`] would compile first for this render,
+    /// and nothing else (no buffer, no upload): a batch compiles the next line's kernel
+    /// while it renders this one, and the next line's `prepare` finds it compiled, or
+    /// waits for it. Refuses what `prepare` refuses.
+    pub fn precompile(&self, scene: &Scene, options: &RenderOptions, packed: bool) -> Result<(), GpuError> {
+        let traced = unsupported::check(scene, options).map_err(GpuError::Unsupported)?;
+        precision::check(scene, options).map_err(GpuError::Precision)?;
+        let plan = Plan::new(scene, options, traced.secondary());
+        let buffers = flattened(scene, options, &plan.rays);
+        let acceleration = plan.acceleration(&buffers, &self.options);
+        let config = kernel_config(self, &buffers, acceleration, PixelLayout::new(options, packed), options, &traced);
+        Compiled::new(self, config, options, &scene.path).map(drop)
+    }
+
     /// Flattens, uploads and binds `scene` for the outputs `options` asks for, once; the
     /// result renders the image tile by tile. `packed` asks for the outputs as 8-bit images
     /// (one word per pixel and output, quantised by the kernel), else as floats.
@@ -58,10 +72,8 @@ impl<'a> PreparedScene<'a> {
         precision::check(scene, options).map_err(GpuError::Precision)?;
         let mut plan = Plan::new(scene, options, traced.secondary());
         let mut buffers = flattened(scene, options, &plan.rays);
-        let config_for = |buffers: &SceneBuffers, acceleration| {
-            let (loop_limit, shared_loads) = (gpu.loop_limit().is_some(), gpu.shares_bin_loads());
-            KernelConfig::new(buffers, acceleration, layout, options, &traced, loop_limit, shared_loads)
-        };
+        let config_for =
+            |buffers: &SceneBuffers, acceleration| kernel_config(gpu, buffers, acceleration, layout, options, &traced);
         // The kernel is compiled (on lavapipe a cost worth hiding even from the shader cache,
         // docs/performance.md) while this thread builds the bins or the hierarchy, uploads the
         // scene and fills the first tile's lists. It is the kernel of the planned way of
@@ -94,6 +106,19 @@ impl<'a> PreparedScene<'a> {
             counters,
         })
     }
+}
+
+/// The kernel for `buffers` on `gpu`, finding candidates by `acceleration`.
+fn kernel_config(
+    gpu: &GpuRenderer,
+    buffers: &SceneBuffers,
+    acceleration: super::Acceleration,
+    layout: PixelLayout,
+    options: &RenderOptions,
+    traced: &super::ray_tree::RenderRays,
+) -> KernelConfig {
+    let (loop_limit, shared_loads) = (gpu.loop_limit().is_some(), gpu.shares_bin_loads());
+    KernelConfig::new(buffers, acceleration, layout, options, traced, loop_limit, shared_loads)
 }
 
 /// What a scene's render casts, and where it finds its candidates.

@@ -11,7 +11,7 @@ use super::{binning, flatten, fuse, specialise};
 use crate::render::RenderOptions;
 use crate::sampling::Sampling;
 use std::collections::HashMap;
-use std::sync::{Arc, Mutex};
+use std::sync::{Arc, Mutex, OnceLock};
 
 /// Kernels a renderer keeps compiled (see [`GpuRenderer::pipeline`]).
 const MAX_CACHED_PIPELINES: usize = 32;
@@ -27,7 +27,12 @@ pub struct GpuRenderer {
     /// which would refuse it: there each scene binds only those its kernels use
     /// ([`bindings`]).
     all_bindings: Option<BindingSet>,
-    pipelines: Mutex<HashMap<(KernelConfig, u32), wgpu::ComputePipeline>>,
+    /// Each kernel compiled or being compiled, by its configuration and bindings: a thread
+    /// that asks for one another thread is compiling waits for it rather than compile it too
+    /// (a batch compiles the next line's kernel while it renders this one).
+    pipelines: Mutex<HashMap<(KernelConfig, u32), Arc<OnceLock<wgpu::ComputePipeline>>>>,
+    /// Kernels this renderer compiled ([`GpuRenderer::kernels_compiled`]).
+    compiled: std::sync::atomic::AtomicUsize,
     /// The kernels compiled by earlier processes, where the adapter keeps them
     /// ([`super::pipeline_cache`]); shared by the renderers on one device.
     pipeline_cache: Option<Arc<PipelineCache>>,
@@ -140,6 +145,7 @@ impl GpuRenderer {
             adapter_info,
             all_bindings,
             pipelines: Mutex::new(HashMap::new()),
+            compiled: Default::default(),
             pipeline_cache,
             options,
         }
@@ -150,6 +156,12 @@ impl GpuRenderer {
     pub fn on_same_device(&self, options: GpuOptions) -> GpuRenderer {
         let (info, device, queue) = (self.adapter_info.clone(), self.device.clone(), self.queue.clone());
         Self::sharing_cache(info, device, queue, options, self.pipeline_cache.clone())
+    }
+
+    /// How many kernels this renderer has compiled (found in none of its own caches; the
+    /// driver's and [`GpuRenderer::pipeline_cache`] may still have spared the work).
+    pub fn kernels_compiled(&self) -> usize {
+        self.compiled.load(std::sync::atomic::Ordering::Relaxed)
     }
 
     /// The pipeline cache kept between processes, where the adapter offers one.
@@ -231,12 +243,23 @@ impl GpuRenderer {
 
     pub(super) fn pipeline(&self, config: KernelConfig, bindings: &BindingSet) -> wgpu::ComputePipeline {
         let key = (config, bindings.mask);
-        let cache = || self.pipelines.lock().unwrap_or_else(|e| e.into_inner());
-        if let Some(pipeline) = cache().get(&key) {
-            return pipeline.clone();
-        }
-        // Compiled without the cache's lock, so that two threads compile two kernels at once
+        let slot = {
+            let mut cache = self.pipelines.lock().unwrap_or_else(|e| e.into_inner());
+            // A compiled kernel holds megabytes on lavapipe; a process that renders many
+            // kinds of scene (the random-scene test: hundreds) starts over rather than keep
+            // them all.
+            if cache.len() >= MAX_CACHED_PIPELINES && !cache.contains_key(&key) {
+                cache.clear();
+            }
+            cache.entry(key).or_default().clone()
+        };
+        // Compiled without the map's lock, so that two threads compile two kernels at once
         // (PreparedScene::new: a planned kernel and the one needed instead).
+        slot.get_or_init(|| self.compile(config, bindings)).clone()
+    }
+
+    fn compile(&self, config: KernelConfig, bindings: &BindingSet) -> wgpu::ComputePipeline {
+        self.compiled.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         let module = self.device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("raycast"),
             source: specialise::shader_source(config.module()),
@@ -256,13 +279,7 @@ impl GpuRenderer {
         if let Some(kept) = &self.pipeline_cache {
             kept.save();
         }
-        let mut cache = cache();
-        // A compiled kernel holds megabytes on lavapipe; a process that renders many kinds
-        // of scene (the random-scene test: hundreds) starts over rather than keep them all.
-        if cache.len() >= MAX_CACHED_PIPELINES && !cache.contains_key(&key) {
-            cache.clear();
-        }
-        cache.entry(key).or_insert(pipeline).clone()
+        pipeline
     }
 }
 
