@@ -115,17 +115,25 @@ pub struct ImageFile {
 }
 
 enum Encoder {
-    /// Uncompressed true-colour TGA with the course's bottom-left origin: rows are placed
-    /// by seeking, so tiles can arrive top first.
-    Tga(BufWriter<std::fs::File>),
+    /// Uncompressed true-colour TGA with the course's bottom-left origin: each call's rows
+    /// are placed by seeking, so tiles can arrive top first.
+    Tga(TgaWriter),
     Png(Box<png::StreamWriter<'static, BufWriter<std::fs::File>>>),
 }
 
 /// TGA header length (no image id, no colour map).
 const TGA_HEADER: u64 = 18;
-/// Bytes gathered before each write to a TGA file: rows arrive one at a time, and a
-/// system call per 8 KiB (the default) cost a 512² image 96 calls instead of 12.
-const TGA_BUFFER: usize = 64 * 1024;
+
+/// Bytes of rows reordered before each write to a TGA file: few enough that the buffer stays
+/// in the processor's cache between the reordering and the system call's copy, many enough
+/// that system calls are few (docs/performance.md, "The file writers").
+const TGA_WRITE: usize = 128 * 1024;
+
+/// A TGA file and the buffer rows are reordered in, kept from call to call.
+struct TgaWriter {
+    file: std::fs::File,
+    block: Vec<u8>,
+}
 
 impl ImageFile {
     /// Starts `path` (format from its extension) for a `width × height` image.
@@ -154,7 +162,7 @@ impl ImageFile {
         let rows = (rgb.len() / row_bytes) as u32;
         assert!(self.rows_written + rows <= self.height, "more rows than the image has");
         let result = match &mut self.encoder {
-            Encoder::Tga(out) => tga_rows(out, rgb, row_bytes, self.height - self.rows_written - rows),
+            Encoder::Tga(out) => out.write_rows(rgb, row_bytes, self.height - self.rows_written - rows),
             Encoder::Png(out) => out.write_all(rgb),
         };
         result.map_err(|e| self.error(e.to_string()))?;
@@ -168,7 +176,7 @@ impl ImageFile {
             return Err(self.error(format!("only {} of {} rows were written", self.rows_written, self.height)));
         }
         let result = match self.encoder {
-            Encoder::Tga(mut out) => out.flush(),
+            Encoder::Tga(mut out) => out.file.flush(),
             Encoder::Png(out) => out.finish().map_err(std::io::Error::other),
         };
         let fail = |message: String| ImageError { path: self.path.clone(), message };
@@ -480,7 +488,7 @@ pub fn temp_beside(path: &Path) -> Result<(LiveTemp, std::fs::File), ImageError>
 }
 
 /// TGA type 2 (uncompressed true colour), 24 bits, origin bottom-left as the course writes it.
-fn tga_start(file: std::fs::File, width: u32, height: u32) -> std::io::Result<BufWriter<std::fs::File>> {
+fn tga_start(mut file: std::fs::File, width: u32, height: u32) -> std::io::Result<TgaWriter> {
     let too_big = |side: u32| u16::try_from(side).map_err(|_| std::io::Error::other("TGA sides are at most 65535"));
     let (w, h) = (too_big(width)?, too_big(height)?);
     let mut header = [0u8; TGA_HEADER as usize];
@@ -488,26 +496,32 @@ fn tga_start(file: std::fs::File, width: u32, height: u32) -> std::io::Result<Bu
     header[12..14].copy_from_slice(&w.to_le_bytes());
     header[14..16].copy_from_slice(&h.to_le_bytes());
     header[16] = 24;
-    let mut out = BufWriter::with_capacity(TGA_BUFFER, file);
-    out.write_all(&header)?;
-    Ok(out)
+    file.write_all(&header)?;
+    Ok(TgaWriter { file, block: Vec::new() })
 }
 
-/// Rows arrive top first but TGA stores the bottom row first: the block lands at file row
-/// `bottom_row` (counted from the bottom), its rows reversed, pixels as BGR.
-fn tga_rows(out: &mut BufWriter<std::fs::File>, rgb: &[u8], row_bytes: usize, bottom_row: u32) -> std::io::Result<()> {
-    use std::io::{Seek, SeekFrom};
-    out.seek(SeekFrom::Start(TGA_HEADER + bottom_row as u64 * row_bytes as u64))?;
-    // A row at a time through the writer's buffer: no copy of the whole block, whose fresh
-    // pages cost more than the swap itself (a 512² tile: 0.45 against 0.6–0.7 ms).
-    let mut bgr = vec![0u8; row_bytes];
-    for from in rgb.chunks_exact(row_bytes).rev() {
-        for (t, f) in bgr.chunks_exact_mut(3).zip(from.chunks_exact(3)) {
-            t.copy_from_slice(&[f[2], f[1], f[0]]);
+impl TgaWriter {
+    /// Rows arrive top first but TGA stores the bottom row first: the block lands at file
+    /// row `bottom_row` (counted from the bottom), its rows reversed, pixels as BGR.
+    fn write_rows(&mut self, rgb: &[u8], row_bytes: usize, bottom_row: u32) -> std::io::Result<()> {
+        use std::io::{Seek, SeekFrom};
+        self.file.seek(SeekFrom::Start(TGA_HEADER + bottom_row as u64 * row_bytes as u64))?;
+        // Bottom row first, the rows go out in file order, a few at a time.
+        let rows_per_write = (TGA_WRITE / row_bytes).max(1);
+        let mut rows = rgb.chunks_exact(row_bytes).rev().peekable();
+        while rows.peek().is_some() {
+            let batch: Vec<&[u8]> = rows.by_ref().take(rows_per_write).collect();
+            self.block.resize(batch.len() * row_bytes, 0);
+            for (to, from) in self.block.chunks_exact_mut(row_bytes).zip(batch) {
+                // Pixels as arrays: the compiler moves several at a time.
+                for (t, f) in to.as_chunks_mut::<3>().0.iter_mut().zip(from.as_chunks::<3>().0) {
+                    *t = [f[2], f[1], f[0]];
+                }
+            }
+            self.file.write_all(&self.block)?;
         }
-        out.write_all(&bgr)?;
+        Ok(())
     }
-    Ok(())
 }
 
 fn png_start(

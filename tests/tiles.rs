@@ -139,6 +139,26 @@ fn streamed_files_read_back_identical() {
     }
 }
 
+/// A TGA written in calls of many rows, each more than one write's worth of reordered rows,
+/// and in calls of one row: the `image` crate reads back the pixels given, bottom-left
+/// origin and BGR order undone.
+#[test]
+fn tga_in_large_and_single_row_calls_reads_back_identical() {
+    let (w, h) = (301u32, 977u32);
+    let pixels: Vec<u8> = (0..w * h * 3).map(|k| (k.wrapping_mul(2_654_435_761) >> 13) as u8).collect();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("big.tga");
+    let mut file = ImageFile::create(&path, w, h).unwrap();
+    let row = (w * 3) as usize;
+    for (start, end) in [(0, 1), (1, 600), (600, 601), (601, 977)] {
+        file.write_rows(&pixels[start * row..end * row]).unwrap();
+    }
+    raycaster::image_io::persist_all(vec![file.finish().unwrap()]).unwrap();
+    let read = read_image(&path).unwrap();
+    assert_eq!(read.dimensions(), (w, h));
+    assert!(read.as_raw() == &pixels, "pixels differ");
+}
+
 /// A file that did not receive all its rows is refused, and nothing is left behind.
 #[test]
 fn incomplete_file_is_refused() {
