@@ -213,8 +213,10 @@ const EXR_COMPRESSION: exr::compression::Compression = exr::compression::Compres
 
 /// An OpenEXR file of 32-bit floats written row by row, top row first, into a temporary file
 /// like [`ImageFile`]. The `exr` crate writes blocks only from inside a closure, so the
-/// encoder runs on its own thread, fed through a channel of at most two row batches: memory
-/// stays bounded by what one call passes in plus one 16-row block.
+/// encoder runs on its own thread, fed through a channel of at most two row batches. It
+/// hands each block to the `exr` crate's pool of compressing threads, which writes them in
+/// order, so the file's bytes are those of one thread. Memory stays bounded by what one call
+/// passes in plus a block per compressing thread.
 pub struct ExrFile {
     path: PathBuf,
     temp: LiveTemp,
@@ -251,10 +253,22 @@ impl ExrFile {
                 let out = BufWriter::new(file);
                 exr::block::write(out, std::iter::once(header).collect(), true, |meta, chunks| {
                     use exr::block::writer::ChunksWriter;
-                    let mut compressor = chunks.sequential_blocks_compressor(&meta);
-                    encode_exr_blocks(&meta.headers[0], size, channels, receiver, |index, block| {
-                        compressor.compress_block(index, block)
-                    })
+                    let blocks = chunks.total_chunks_count();
+                    // None where nothing is compressed, one block, or no threads (wasm).
+                    let parallel = if blocks > 1 { chunks.parallel_blocks_compressor(&meta) } else { None };
+                    match parallel {
+                        Some(mut compressor) => {
+                            encode_exr_blocks(&meta.headers[0], size, channels, receiver, |index, block| {
+                                compressor.add_block_to_compression_queue(index, block)
+                            })
+                        }
+                        None => {
+                            let mut compressor = chunks.sequential_blocks_compressor(&meta);
+                            encode_exr_blocks(&meta.headers[0], size, channels, receiver, |index, block| {
+                                compressor.compress_block(index, block)
+                            })
+                        }
+                    }
                 })
             })
             .map_err(|e| ImageError { path: path.to_path_buf(), message: e.to_string() })?;
