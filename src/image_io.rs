@@ -104,7 +104,8 @@ pub struct ImageError {
 
 /// An image file being written row by row, top row first, into a temporary file beside its
 /// destination; [`persist_all`] renames finished files into place. Memory stays bounded by
-/// what one call passes in, so any image the formats allow can be written.
+/// what one call passes in (and for PNG a few strips of 1 MiB per core), so any image the
+/// formats allow can be written.
 pub struct ImageFile {
     path: PathBuf,
     temp: LiveTemp,
@@ -115,17 +116,25 @@ pub struct ImageFile {
 }
 
 enum Encoder {
-    /// Uncompressed true-colour TGA with the course's bottom-left origin: rows are placed
-    /// by seeking, so tiles can arrive top first.
-    Tga(BufWriter<std::fs::File>),
-    Png(Box<png::StreamWriter<'static, BufWriter<std::fs::File>>>),
+    /// Uncompressed true-colour TGA with the course's bottom-left origin: each call's rows
+    /// are placed by seeking, so tiles can arrive top first.
+    Tga(TgaWriter),
+    Png(Box<PngWriter>),
 }
 
 /// TGA header length (no image id, no colour map).
 const TGA_HEADER: u64 = 18;
-/// Bytes gathered before each write to a TGA file: rows arrive one at a time, and a
-/// system call per 8 KiB (the default) cost a 512² image 96 calls instead of 12.
-const TGA_BUFFER: usize = 64 * 1024;
+
+/// Bytes of rows reordered before each write to a TGA file: few enough that the buffer stays
+/// in the processor's cache between the reordering and the system call's copy, many enough
+/// that system calls are few (docs/performance.md, "The file writers").
+const TGA_WRITE: usize = 128 * 1024;
+
+/// A TGA file and the buffer rows are reordered in, kept from call to call.
+struct TgaWriter {
+    file: std::fs::File,
+    block: Vec<u8>,
+}
 
 impl ImageFile {
     /// Starts `path` (format from its extension) for a `width × height` image.
@@ -154,8 +163,8 @@ impl ImageFile {
         let rows = (rgb.len() / row_bytes) as u32;
         assert!(self.rows_written + rows <= self.height, "more rows than the image has");
         let result = match &mut self.encoder {
-            Encoder::Tga(out) => tga_rows(out, rgb, row_bytes, self.height - self.rows_written - rows),
-            Encoder::Png(out) => out.write_all(rgb),
+            Encoder::Tga(out) => out.write_rows(rgb, row_bytes, self.height - self.rows_written - rows),
+            Encoder::Png(out) => out.write_rows(rgb),
         };
         result.map_err(|e| self.error(e.to_string()))?;
         self.rows_written += rows;
@@ -168,8 +177,8 @@ impl ImageFile {
             return Err(self.error(format!("only {} of {} rows were written", self.rows_written, self.height)));
         }
         let result = match self.encoder {
-            Encoder::Tga(mut out) => out.flush(),
-            Encoder::Png(out) => out.finish().map_err(std::io::Error::other),
+            Encoder::Tga(mut out) => out.file.flush(),
+            Encoder::Png(out) => out.finish(),
         };
         let fail = |message: String| ImageError { path: self.path.clone(), message };
         result.map_err(|e| fail(e.to_string()))?;
@@ -200,13 +209,57 @@ impl ExrChannels {
     }
 }
 
-/// ZIP over blocks of 16 rows: lossless, and at most 16 rows wait in memory for their block.
-const EXR_COMPRESSION: exr::compression::Compression = exr::compression::Compression::ZIP16;
+/// How the blocks of an EXR file are compressed (`--exr-compression`): OpenEXR's lossless
+/// methods, by the names OpenEXR gives them. Each keeps every float bit for bit.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ExrCompression {
+    /// Uncompressed, one row a block.
+    None,
+    /// Run-length encoding, one row a block.
+    Rle,
+    /// Deflate (zlib), one row a block.
+    Zips,
+    /// Deflate (zlib) over blocks of 16 rows: the default, smaller than `zips` for the
+    /// same speed, and at most 16 rows wait in memory for their block.
+    #[default]
+    Zip,
+    /// Wavelet and Huffman coding over blocks of 32 rows.
+    Piz,
+}
+
+impl ExrCompression {
+    pub const ALL: [ExrCompression; 5] =
+        [ExrCompression::None, ExrCompression::Rle, ExrCompression::Zips, ExrCompression::Zip, ExrCompression::Piz];
+
+    /// The name the command line takes.
+    pub fn name(self) -> &'static str {
+        match self {
+            ExrCompression::None => "none",
+            ExrCompression::Rle => "rle",
+            ExrCompression::Zips => "zips",
+            ExrCompression::Zip => "zip",
+            ExrCompression::Piz => "piz",
+        }
+    }
+
+    fn method(self) -> exr::compression::Compression {
+        use exr::compression::Compression;
+        match self {
+            ExrCompression::None => Compression::Uncompressed,
+            ExrCompression::Rle => Compression::RLE,
+            ExrCompression::Zips => Compression::ZIP1,
+            ExrCompression::Zip => Compression::ZIP16,
+            ExrCompression::Piz => Compression::PIZ,
+        }
+    }
+}
 
 /// An OpenEXR file of 32-bit floats written row by row, top row first, into a temporary file
 /// like [`ImageFile`]. The `exr` crate writes blocks only from inside a closure, so the
-/// encoder runs on its own thread, fed through a channel of at most two row batches: memory
-/// stays bounded by what one call passes in plus one 16-row block.
+/// encoder runs on its own thread, fed through a channel of at most two row batches. It
+/// hands each block to the `exr` crate's pool of compressing threads, which writes them in
+/// order, so the file's bytes are those of one thread. Memory stays bounded by what one call
+/// passes in plus a block per compressing thread.
 pub struct ExrFile {
     path: PathBuf,
     temp: LiveTemp,
@@ -219,8 +272,15 @@ pub struct ExrFile {
 }
 
 impl ExrFile {
-    /// Starts `path` for a `width × height` image with `channels`.
-    pub fn create(path: &Path, width: u32, height: u32, channels: ExrChannels) -> Result<ExrFile, ImageError> {
+    /// Starts `path` for a `width × height` image with `channels`, its blocks compressed
+    /// with `compression`.
+    pub fn create(
+        path: &Path,
+        width: u32,
+        height: u32,
+        channels: ExrChannels,
+        compression: ExrCompression,
+    ) -> Result<ExrFile, ImageError> {
         use exr::meta::attribute::{ChannelDescription, LineOrder, SampleType};
         use exr::meta::header::{Header, LayerAttributes};
         let (temp, file) = temp_beside(path)?;
@@ -232,7 +292,7 @@ impl ExrFile {
         let list = names.iter().map(|n| ChannelDescription::new(*n, SampleType::F32, true)).collect();
         let size = (width as usize, height as usize);
         let header = Header::new("".into(), size, list).with_attributes(LayerAttributes::default()).with_encoding(
-            EXR_COMPRESSION,
+            compression.method(),
             exr::meta::BlockDescription::ScanLines,
             LineOrder::Increasing,
         );
@@ -243,10 +303,22 @@ impl ExrFile {
                 let out = BufWriter::new(file);
                 exr::block::write(out, std::iter::once(header).collect(), true, |meta, chunks| {
                     use exr::block::writer::ChunksWriter;
-                    let mut compressor = chunks.sequential_blocks_compressor(&meta);
-                    encode_exr_blocks(&meta.headers[0], size, channels, receiver, |index, block| {
-                        compressor.compress_block(index, block)
-                    })
+                    let blocks = chunks.total_chunks_count();
+                    // None where nothing is compressed, one block, or no threads (wasm).
+                    let parallel = if blocks > 1 { chunks.parallel_blocks_compressor(&meta) } else { None };
+                    match parallel {
+                        Some(mut compressor) => {
+                            encode_exr_blocks(&meta.headers[0], size, channels, receiver, |index, block| {
+                                compressor.add_block_to_compression_queue(index, block)
+                            })
+                        }
+                        None => {
+                            let mut compressor = chunks.sequential_blocks_compressor(&meta);
+                            encode_exr_blocks(&meta.headers[0], size, channels, receiver, |index, block| {
+                                compressor.compress_block(index, block)
+                            })
+                        }
+                    }
                 })
             })
             .map_err(|e| ImageError { path: path.to_path_buf(), message: e.to_string() })?;
@@ -480,7 +552,7 @@ pub fn temp_beside(path: &Path) -> Result<(LiveTemp, std::fs::File), ImageError>
 }
 
 /// TGA type 2 (uncompressed true colour), 24 bits, origin bottom-left as the course writes it.
-fn tga_start(file: std::fs::File, width: u32, height: u32) -> std::io::Result<BufWriter<std::fs::File>> {
+fn tga_start(mut file: std::fs::File, width: u32, height: u32) -> std::io::Result<TgaWriter> {
     let too_big = |side: u32| u16::try_from(side).map_err(|_| std::io::Error::other("TGA sides are at most 65535"));
     let (w, h) = (too_big(width)?, too_big(height)?);
     let mut header = [0u8; TGA_HEADER as usize];
@@ -488,37 +560,215 @@ fn tga_start(file: std::fs::File, width: u32, height: u32) -> std::io::Result<Bu
     header[12..14].copy_from_slice(&w.to_le_bytes());
     header[14..16].copy_from_slice(&h.to_le_bytes());
     header[16] = 24;
-    let mut out = BufWriter::with_capacity(TGA_BUFFER, file);
-    out.write_all(&header)?;
-    Ok(out)
+    file.write_all(&header)?;
+    Ok(TgaWriter { file, block: Vec::new() })
 }
 
-/// Rows arrive top first but TGA stores the bottom row first: the block lands at file row
-/// `bottom_row` (counted from the bottom), its rows reversed, pixels as BGR.
-fn tga_rows(out: &mut BufWriter<std::fs::File>, rgb: &[u8], row_bytes: usize, bottom_row: u32) -> std::io::Result<()> {
-    use std::io::{Seek, SeekFrom};
-    out.seek(SeekFrom::Start(TGA_HEADER + bottom_row as u64 * row_bytes as u64))?;
-    // A row at a time through the writer's buffer: no copy of the whole block, whose fresh
-    // pages cost more than the swap itself (a 512² tile: 0.45 against 0.6–0.7 ms).
-    let mut bgr = vec![0u8; row_bytes];
-    for from in rgb.chunks_exact(row_bytes).rev() {
-        for (t, f) in bgr.chunks_exact_mut(3).zip(from.chunks_exact(3)) {
-            t.copy_from_slice(&[f[2], f[1], f[0]]);
+impl TgaWriter {
+    /// Rows arrive top first but TGA stores the bottom row first: the block lands at file
+    /// row `bottom_row` (counted from the bottom), its rows reversed, pixels as BGR.
+    fn write_rows(&mut self, rgb: &[u8], row_bytes: usize, bottom_row: u32) -> std::io::Result<()> {
+        use std::io::{Seek, SeekFrom};
+        self.file.seek(SeekFrom::Start(TGA_HEADER + bottom_row as u64 * row_bytes as u64))?;
+        // Bottom row first, the rows go out in file order, a few at a time.
+        let rows_per_write = (TGA_WRITE / row_bytes).max(1);
+        let mut rows = rgb.chunks_exact(row_bytes).rev().peekable();
+        while rows.peek().is_some() {
+            let batch: Vec<&[u8]> = rows.by_ref().take(rows_per_write).collect();
+            self.block.resize(batch.len() * row_bytes, 0);
+            for (to, from) in self.block.chunks_exact_mut(row_bytes).zip(batch) {
+                // Pixels as arrays: the compiler moves several at a time.
+                for (t, f) in to.as_chunks_mut::<3>().0.iter_mut().zip(from.as_chunks::<3>().0) {
+                    *t = [f[2], f[1], f[0]];
+                }
+            }
+            self.file.write_all(&self.block)?;
         }
-        out.write_all(&bgr)?;
+        Ok(())
     }
-    Ok(())
 }
 
-fn png_start(
-    file: std::fs::File,
-    width: u32,
-    height: u32,
-) -> Result<png::StreamWriter<'static, BufWriter<std::fs::File>>, png::EncodingError> {
+fn png_start(file: std::fs::File, width: u32, height: u32) -> Result<PngWriter, png::EncodingError> {
     let mut encoder = png::Encoder::new(BufWriter::new(file), width, height);
     encoder.set_color(png::ColorType::Rgb);
     encoder.set_depth(png::BitDepth::Eight);
-    encoder.write_header()?.into_stream_writer()
+    // Refuses a side of 0 before the strips divide by the row's length.
+    let out = encoder.write_header()?;
+    let row_bytes = width as usize * 3;
+    Ok(PngWriter {
+        out,
+        row_bytes,
+        strip_rows: (PNG_STRIP_BYTES / row_bytes).max(1),
+        strip: Vec::new(),
+        above: Vec::new(),
+        rows_left: height as usize,
+        strips_started: 0,
+        pending: std::collections::VecDeque::new(),
+        adler: 1,
+    })
+}
+
+/// Raw bytes of rows deflated as one strip: enough that restarting the deflate stream at
+/// each strip costs little (docs/performance.md, "The file writers").
+const PNG_STRIP_BYTES: usize = 1 << 20;
+
+/// zlib's compression level for PNG image data (docs/performance.md, "The file writers").
+const PNG_LEVEL: u32 = 4;
+
+/// A PNG whose image data is deflated in strips of rows, on the writers' threads, and written
+/// in order as IDAT chunks of one zlib stream. Each strip's raw deflate ends on a byte
+/// boundary (a sync flush; the last one finishes the stream), so the strips concatenate
+/// into one valid stream (RFC 1951 §3.2.4, as `pigz` joins its blocks); the stream's
+/// Adler-32 is combined from the strips' (RFC 1950 §2.2). Every row is filtered with Up (PNG
+/// §9.2, type 2), which needs only the row above: a strip carries its first row's.
+struct PngWriter {
+    out: png::Writer<BufWriter<std::fs::File>>,
+    row_bytes: usize,
+    strip_rows: usize,
+    /// Rows gathered for the next strip.
+    strip: Vec<u8>,
+    /// The row above `strip` (empty above the first row: PNG's Up then takes zeros).
+    above: Vec<u8>,
+    /// Rows of the image not yet gathered.
+    rows_left: usize,
+    strips_started: usize,
+    /// The strips being deflated, oldest first.
+    pending: std::collections::VecDeque<std::sync::mpsc::Receiver<Strip>>,
+    /// Adler-32 of the filtered bytes written so far.
+    adler: u32,
+}
+
+/// A deflated strip: its bytes, and the Adler-32 and length of the filtered bytes it holds.
+struct Strip {
+    deflated: std::io::Result<Vec<u8>>,
+    adler: u32,
+    len: u64,
+    /// The image's last: the stream ends with it.
+    last: bool,
+}
+
+impl PngWriter {
+    fn write_rows(&mut self, mut rgb: &[u8]) -> std::io::Result<()> {
+        while !rgb.is_empty() {
+            let gathered = self.strip.len() / self.row_bytes;
+            let take = (self.strip_rows - gathered).min(rgb.len() / self.row_bytes);
+            let (rows, rest) = rgb.split_at(take * self.row_bytes);
+            self.strip.extend_from_slice(rows);
+            self.rows_left -= take;
+            rgb = rest;
+            if gathered + take == self.strip_rows || self.rows_left == 0 {
+                self.deflate_strip()?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Sends the gathered rows to be deflated; writes out finished strips while too many wait.
+    fn deflate_strip(&mut self) -> std::io::Result<()> {
+        let rows = std::mem::take(&mut self.strip);
+        let above = std::mem::replace(&mut self.above, rows[rows.len() - self.row_bytes..].to_vec());
+        let (first, last, row_bytes) = (self.strips_started == 0, self.rows_left == 0, self.row_bytes);
+        self.strips_started += 1;
+        let job = move || deflate_png_strip(&above, &rows, row_bytes, first, last);
+        match writer_pool() {
+            Some(pool) => {
+                let (send, receive) = std::sync::mpsc::sync_channel(1);
+                pool.spawn(move || drop(send.send(job())));
+                self.pending.push_back(receive);
+                while self.pending.len() > pool.current_num_threads() + 2 {
+                    self.write_oldest()?;
+                }
+                Ok(())
+            }
+            None => self.write_strip(job()),
+        }
+    }
+
+    fn write_oldest(&mut self) -> std::io::Result<()> {
+        let pending = self.pending.pop_front().expect("a strip is pending");
+        let strip = pending.recv().map_err(|_| std::io::Error::other("a PNG strip's deflate stopped"))?;
+        self.write_strip(strip)
+    }
+
+    fn write_strip(&mut self, strip: Strip) -> std::io::Result<()> {
+        let mut deflated = strip.deflated?;
+        self.adler = zlib_rs::adler32::adler32_combine(self.adler, strip.adler, strip.len);
+        if strip.last {
+            // RFC 1950 §2.2: the stream ends with its Adler-32, big-endian.
+            deflated.extend_from_slice(&self.adler.to_be_bytes());
+        }
+        self.out.write_chunk(png::chunk::IDAT, &deflated).map_err(std::io::Error::other)
+    }
+
+    fn finish(mut self) -> std::io::Result<()> {
+        while !self.pending.is_empty() {
+            self.write_oldest()?;
+        }
+        self.out.finish().map_err(std::io::Error::other)
+    }
+}
+
+/// Filters `rows` (PNG's Up, `above` the row before them) and deflates them raw: the zlib
+/// header first for the first strip, a finished stream for the last, a sync flush otherwise.
+fn deflate_png_strip(above: &[u8], rows: &[u8], row_bytes: usize, first: bool, last: bool) -> Strip {
+    let mut filtered = Vec::with_capacity(rows.len() + rows.len() / row_bytes);
+    let mut prior = above;
+    for row in rows.chunks_exact(row_bytes) {
+        filtered.push(2);
+        if prior.is_empty() {
+            filtered.extend_from_slice(row);
+        } else {
+            filtered.extend(row.iter().zip(prior).map(|(x, b)| x.wrapping_sub(*b)));
+        }
+        prior = row;
+    }
+    let adler = zlib_rs::adler32::adler32(1, &filtered);
+    let mut deflated = Vec::with_capacity(filtered.len() / 16 + 1024);
+    if first {
+        deflated.extend_from_slice(&ZLIB_HEADER);
+    }
+    let mut compress = flate2::Compress::new(flate2::Compression::new(PNG_LEVEL), false);
+    let flush = if last { flate2::FlushCompress::Finish } else { flate2::FlushCompress::Sync };
+    let deflated = loop {
+        if deflated.capacity() - deflated.len() < 64 {
+            deflated.reserve(deflated.capacity());
+        }
+        let done = compress.total_in() as usize;
+        match compress.compress_vec(&filtered[done..], &mut deflated, flush) {
+            Err(e) => break Err(std::io::Error::other(e)),
+            Ok(flate2::Status::StreamEnd) => break Ok(deflated),
+            // A flush is complete once it leaves room unused.
+            Ok(_)
+                if !last && compress.total_in() as usize == filtered.len() && deflated.len() < deflated.capacity() =>
+            {
+                break Ok(deflated)
+            }
+            Ok(_) => {}
+        }
+    };
+    Strip { deflated, adler, len: filtered.len() as u64, last }
+}
+
+/// RFC 1950 §2.2: deflate with a 32 KiB window (0x78), then FLEVEL as zlib sets it for
+/// [`PNG_LEVEL`] and FCHECK, which makes the pair a multiple of 31.
+const ZLIB_HEADER: [u8; 2] = {
+    let flevel: u32 = match PNG_LEVEL {
+        0 | 1 => 0,
+        2..=5 => 1,
+        6 => 2,
+        _ => 3,
+    };
+    let flg = flevel << 6;
+    [0x78, (flg + (31 - (0x78 * 256 + flg) % 31) % 31) as u8]
+};
+
+/// The threads that compress PNG strips, one per core, made on first use; none where threads
+/// cannot be made (wasm), and strips are then deflated by the caller. Their own pool, not
+/// rayon's global one, whose threads may be the very caller waiting for a strip.
+fn writer_pool() -> Option<&'static rayon::ThreadPool> {
+    static POOL: std::sync::OnceLock<Option<rayon::ThreadPool>> = std::sync::OnceLock::new();
+    POOL.get_or_init(|| rayon::ThreadPoolBuilder::new().thread_name(|k| format!("png-deflate-{k}")).build().ok())
+        .as_ref()
 }
 
 /// Temporary files are private (0600); an image is an ordinary file (0644).

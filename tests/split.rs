@@ -104,12 +104,12 @@ fn exr_from_the_gpu_is_the_reference_within_f32_tolerance() {
 /// what was written.
 #[test]
 fn exr_streamed_in_uneven_chunks_reads_back() {
-    use raycaster::image_io::{persist_all, ExrChannels, ExrFile};
+    use raycaster::image_io::{persist_all, ExrChannels, ExrCompression, ExrFile};
     let dir = tempfile::tempdir().unwrap();
     let (w, h) = (5u32, 37u32);
     let values: Vec<f32> = (0..w * h * 3).map(|v| v as f32 * 0.25 - 7.0).collect();
     let path = dir.path().join("s.exr");
-    let mut file = ExrFile::create(&path, w, h, ExrChannels::Rgb).unwrap();
+    let mut file = ExrFile::create(&path, w, h, ExrChannels::Rgb, ExrCompression::default()).unwrap();
     let row = (w * 3) as usize;
     for (start, end) in [(0, 5), (5, 6), (6, 30), (30, 37)] {
         file.write_rows(&values[start * row..end * row]).unwrap();
@@ -122,6 +122,85 @@ fn exr_streamed_in_uneven_chunks_reads_back() {
         let want: Vec<f32> = values.iter().skip(offset).step_by(3).copied().collect();
         assert_eq!(channel(&c, name), &want[..], "{name}");
     }
+}
+
+/// Every `--exr-compression` keeps every float bit for bit: NaN, both infinities, both zeros,
+/// subnormals and ordinary values, streamed in uneven chunks into an image whose 101 rows
+/// fill neither 16-row (ZIP) nor 32-row (PIZ) blocks evenly and span several, so that the
+/// compressing threads take turns. The file's header names the method asked for, by the
+/// names of OpenEXR's specification.
+#[test]
+fn every_exr_compression_reads_back_the_same_floats() {
+    use exr::compression::Compression;
+    use raycaster::image_io::{persist_all, ExrChannels, ExrCompression, ExrFile};
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (67u32, 101u32);
+    let specials = [f32::NAN, f32::INFINITY, f32::NEG_INFINITY, 0.0, -0.0, f32::MIN_POSITIVE / 8.0, f32::MAX];
+    let value = |k: usize| match k % 11 {
+        // A smooth ramp, as renders are, and specials between.
+        0..=3 => specials[k % specials.len()],
+        _ => (k as f32 * 0.37).sin() * 40.0 + k as f32 * 1e-3,
+    };
+    let expected = [
+        (ExrCompression::None, Compression::Uncompressed),
+        (ExrCompression::Rle, Compression::RLE),
+        (ExrCompression::Zips, Compression::ZIP1),
+        (ExrCompression::Zip, Compression::ZIP16),
+        (ExrCompression::Piz, Compression::PIZ),
+    ];
+    assert_eq!(expected.map(|(c, _)| c), ExrCompression::ALL, "every choice is tested");
+    for (compression, method) in expected {
+        for (channels, names) in [(ExrChannels::Rgb, &["R", "G", "B"][..]), (ExrChannels::Depth, &["Z"][..])] {
+            let n = channels.count();
+            let values: Vec<f32> = (0..(w * h) as usize * n).map(value).collect();
+            let path = dir.path().join(format!("{}-{n}.exr", compression.name()));
+            let mut file = ExrFile::create(&path, w, h, channels, compression).unwrap();
+            let row = w as usize * n;
+            for (start, end) in [(0, 1), (1, 40), (40, 41), (41, 101)] {
+                file.write_rows(&values[start * row..end * row]).unwrap();
+            }
+            persist_all(vec![file.finish().unwrap()]).unwrap();
+            let meta = exr::meta::MetaData::read_from_file(&path, false).unwrap();
+            assert_eq!(meta.headers[0].compression, method, "{}", compression.name());
+            let (rw, rh, c) = read_exr(&path);
+            assert_eq!((rw, rh), (w as usize, h as usize));
+            for (offset, name) in names.iter().enumerate() {
+                let want: Vec<u32> = values.iter().skip(offset).step_by(n).map(|v| v.to_bits()).collect();
+                let got: Vec<u32> = channel(&c, name).iter().map(|v| v.to_bits()).collect();
+                assert!(got == want, "{} channel {name}: floats differ", compression.name());
+            }
+        }
+    }
+}
+
+/// `--exr-compression` reaches the files a render writes, and `stitch`'s: PIZ depth from the
+/// CPU backend holds the reference's floats bit for bit, and the stitched RLE copy too.
+#[test]
+fn exr_compression_flag_reaches_render_and_stitch() {
+    let dir = tempfile::tempdir().unwrap();
+    let depth = dir.path().join("d.exr");
+    let input = scene("ortho_behind_camera.txt");
+    let (w, h) = (W.to_string(), H.to_string());
+    let flags = ["-input", &input, "-size", &w, &h, "--backend", "cpu", "-depth", "1", "2"];
+    check(raycaster(&[&flags[..], &[depth.to_str().unwrap(), "--exr-compression", "piz"]].concat()));
+    let loaded = raycaster::scene::load_scene(&common::scenes_dir().join("ortho_behind_camera.txt")).unwrap();
+    let reference = raycaster::cpu::render(&loaded, &RenderOptions::all(W, H));
+    let want: Vec<u32> = (0..reference.hit.len())
+        .map(|k| if reference.hit[k] { reference.depth[k] } else { f32::INFINITY }.to_bits())
+        .collect();
+    let depth_bits =
+        |path: &Path| -> Vec<u32> { channel(&read_exr(path).2, "Z").iter().map(|t| t.to_bits()).collect() };
+    let method = |path: &Path| exr::meta::MetaData::read_from_file(path, false).unwrap().headers[0].compression;
+    assert_eq!(method(&depth), exr::compression::Compression::PIZ);
+    assert!(depth_bits(&depth) == want, "PIZ depth differs from the reference");
+
+    let stitched = dir.path().join("s.exr");
+    check(raycaster(&[&flags[..], &[stitched.to_str().unwrap(), "--tile", "1/2"]].concat()));
+    check(raycaster(&[&flags[..], &[stitched.to_str().unwrap(), "--tile", "0/2"]].concat()));
+    let s = stitched.to_str().unwrap();
+    check(raycaster(&["stitch", "-depth", "1", "2", s, "--exr-compression", "rle"]));
+    assert_eq!(method(&stitched), exr::compression::Compression::RLE);
+    assert!(depth_bits(&stitched) == want, "stitched RLE depth differs from the reference");
 }
 
 /// Outputs of one render, in every format between them: `(flag words, file name)`.

@@ -169,6 +169,64 @@ fn streamed_files_read_back_identical() {
     }
 }
 
+/// A TGA written in calls of many rows, each more than one write's worth of reordered rows,
+/// and in calls of one row: the `image` crate reads back the pixels given, bottom-left
+/// origin and BGR order undone.
+#[test]
+fn tga_in_large_and_single_row_calls_reads_back_identical() {
+    let (w, h) = (301u32, 977u32);
+    let pixels: Vec<u8> = (0..w * h * 3).map(|k| (k.wrapping_mul(2_654_435_761) >> 13) as u8).collect();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("big.tga");
+    let mut file = ImageFile::create(&path, w, h).unwrap();
+    let row = (w * 3) as usize;
+    for (start, end) in [(0, 1), (1, 600), (600, 601), (601, 977)] {
+        file.write_rows(&pixels[start * row..end * row]).unwrap();
+    }
+    raycaster::image_io::persist_all(vec![file.finish().unwrap()]).unwrap();
+    let read = read_image(&path).unwrap();
+    assert_eq!(read.dimensions(), (w, h));
+    assert!(read.as_raw() == &pixels, "pixels differ");
+}
+
+/// PNGs deflated in strips: 1001 rows of 3000 bytes span several strips of 1 MiB and end in
+/// a shorter one, and a 1 × 1 image is one strip that both starts and ends the stream; each
+/// is streamed in uneven calls. The png crate, checking every chunk's CRC and the zlib
+/// stream's Adler-32, reads back the pixels given, and so does the image crate.
+#[test]
+fn png_in_strips_reads_back_identical_with_checksums_checked() {
+    for (w, h) in [(1000u32, 1001u32), (1, 1)] {
+        // Flat runs, a gradient and noise: long matches, short ones and literals.
+        let pixels: Vec<u8> = (0..w * h * 3)
+            .map(|k| match (k / 3 / w) % 3 {
+                0 => 40,
+                1 => (k % (w * 3) / 12) as u8,
+                _ => (k.wrapping_mul(2_654_435_761) >> 13) as u8,
+            })
+            .collect();
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("strips.png");
+        let mut file = ImageFile::create(&path, w, h).unwrap();
+        let row = (w * 3) as usize;
+        let cuts = [0, 1, 350.min(h as usize), 351.min(h as usize), h as usize];
+        for pair in cuts.windows(2) {
+            file.write_rows(&pixels[pair[0] * row..pair[1] * row]).unwrap();
+        }
+        raycaster::image_io::persist_all(vec![file.finish().unwrap()]).unwrap();
+
+        let mut options = png::DecodeOptions::default();
+        options.set_ignore_checksums(false);
+        let decoder =
+            png::Decoder::new_with_options(std::io::BufReader::new(std::fs::File::open(&path).unwrap()), options);
+        let mut reader = decoder.read_info().unwrap();
+        let mut decoded = vec![0; reader.output_buffer_size().unwrap()];
+        let frame = reader.next_frame(&mut decoded).unwrap();
+        assert_eq!((frame.width, frame.height, frame.color_type), (w, h, png::ColorType::Rgb));
+        assert!(decoded == pixels, "{w}×{h}: the png crate reads other pixels");
+        assert!(read_image(&path).unwrap().as_raw() == &pixels, "{w}×{h}: the image crate reads other pixels");
+    }
+}
+
 /// A file that did not receive all its rows is refused, and nothing is left behind.
 #[test]
 fn incomplete_file_is_refused() {

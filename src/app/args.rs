@@ -3,6 +3,7 @@
 //! module can depend on it.
 
 use raycaster::grid::GridSize;
+use raycaster::image_io::ExrCompression;
 use raycaster::render::{Output, Outputs, Shading, SphereTest, TriangleTest};
 use raycaster::sampling::Sampling;
 use std::fmt;
@@ -123,12 +124,15 @@ impl RenderArgs {
     }
 }
 
-/// The files of `-output`, `-normals` and `-depth MIN MAX`.
+/// The files of `-output`, `-normals` and `-depth MIN MAX`, and how those that are EXR
+/// compress their blocks.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct OutputPaths {
     pub color: Option<PathBuf>,
     pub normals: Option<PathBuf>,
     pub depth: Option<DepthArgs>,
+    /// `--exr-compression`.
+    pub exr_compression: ExrCompression,
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -347,6 +351,7 @@ mod tests {
             color: None,
             normals: Some("n.tga".into()),
             depth: Some(DepthArgs { min: 1.0, max: 2.0, path: "d.exr".into() }),
+            exr_compression: ExrCompression::default(),
         };
         assert_eq!(files.named(), [(Output::Normals, Path::new("n.tga")), (Output::Depth, Path::new("d.exr"))]);
         assert_eq!(files.outputs(), Outputs::from(Output::Normals).with(Output::Depth));

@@ -629,6 +629,25 @@ mod tests {
             .contains("cramer, moller, watertight"));
     }
 
+    /// `--exr-compression` takes OpenEXR's names of its lossless methods, on a render and on
+    /// `stitch` (which writes the files of a split render); zip is the default. Anything else
+    /// is refused by name, with the choices; `compare` writes no file and does not take it.
+    #[test]
+    fn exr_compression_choices() {
+        use raycaster::image_io::ExrCompression;
+        let chosen = |line: &str| render(line).files.exr_compression;
+        assert_eq!(chosen("-input s -size 1 1 -depth 0 1 d.exr"), ExrCompression::Zip);
+        assert_eq!(chosen("-input s -size 1 1 -depth 0 1 d.exr --exr-compression piz"), ExrCompression::Piz);
+        assert_eq!(chosen("-input s -size 1 1 -output o.exr --exr-compression=rle"), ExrCompression::Rle);
+        match parse("stitch -depth 0 1 d.exr --exr-compression none") {
+            Ok(Command::Stitch(args)) => assert_eq!(args.files.exr_compression, ExrCompression::None),
+            other => panic!("{other:?}"),
+        }
+        let refused = parse("-input s -size 1 1 -depth 0 1 d.exr --exr-compression lzw").unwrap_err().0;
+        assert!(refused.contains("--exr-compression: 'lzw' is not one of none, rle, zips, zip, piz"), "{refused}");
+        assert!(parse("compare -input s -size 1 1 -depth 0 1 d.exr --exr-compression zip").is_err());
+    }
+
     /// `compare` takes `--outputs` instead of file names (or both), and refuses `--backend`.
     #[test]
     fn compare_outputs() {

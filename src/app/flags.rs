@@ -8,6 +8,7 @@ use crate::app::args::{
     BackendChoice, DepthArgs, OutputPaths, Picture, Pictures, Split, UsageError, Verbosity, MAX_THREADS,
 };
 use raycaster::grid::GridSize;
+use raycaster::image_io::ExrCompression;
 use raycaster::render::{Outputs, Shading, SphereTest, TriangleTest};
 use raycaster::sampling::{Filter, Sampler};
 use std::path::PathBuf;
@@ -427,6 +428,20 @@ pub static FLAGS: &[Flag] = &[
     )
     .help("the GPU's ray/sphere test (default robust)")
     .details("docs/accuracy.md"),
+    Flag::ours(
+        "exr_compression",
+        "C",
+        Takes::Choice {
+            names: || ExrCompression::ALL.map(ExrCompression::name).to_vec(),
+            set: |g, k| g.files.exr_compression = ExrCompression::ALL[k],
+        },
+        Verbs::of(&[Render, Stitch]),
+    )
+    .help(
+        "how .exr files compress their blocks, all lossless: none, rle,\n\
+         zips, zip (default) or piz (with --tile: give it to stitch)",
+    )
+    .details("OpenEXR's methods of those names; the floats read back are the same with each; docs/usage.md, \"Float outputs\""),
     Flag::ours("tile", "K/N", Takes::Split(|g, tile| g.tile = Some(tile)), Verbs::of(&[Render])).help(
         "render only band K (0-based, from the top) of N bands of rows\n\
          and write FILE.part-K-of-N beside each output; see stitch",

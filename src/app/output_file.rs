@@ -3,7 +3,9 @@
 
 use crate::app::args::OutputPaths;
 use crate::app::part::{PartHeader, PartWriter};
-use raycaster::image_io::{self, ExrChannels, ExrFile, FinishedImage, ImageError, ImageFile, ImageFormat};
+use raycaster::image_io::{
+    self, ExrChannels, ExrCompression, ExrFile, FinishedImage, ImageError, ImageFile, ImageFormat,
+};
 use raycaster::render::{Frame, Output};
 use std::path::PathBuf;
 
@@ -16,6 +18,8 @@ pub struct OutputFile {
     /// The `-depth MIN MAX` range that maps depth to grey: for an 8-bit depth image only (an
     /// EXR holds `t` itself).
     pub depth_range: Option<(f32, f32)>,
+    /// How an EXR file compresses its blocks; the pixels are the same whichever it is.
+    pub exr_compression: ExrCompression,
 }
 
 /// Rows of final pixel data: 8-bit RGB, or floats for EXR.
@@ -35,7 +39,13 @@ impl OutputFile {
                 // The command line accepts only paths with a known extension.
                 let format = ImageFormat::from_path(path).unwrap_or(ImageFormat::Tga);
                 let depth_range = range.filter(|_| output == Output::Depth && format != ImageFormat::Exr);
-                OutputFile { output, path: path.to_path_buf(), format, depth_range }
+                OutputFile {
+                    output,
+                    path: path.to_path_buf(),
+                    format,
+                    depth_range,
+                    exr_compression: files.exr_compression,
+                }
             })
             .collect()
     }
@@ -102,7 +112,9 @@ impl Sink {
     /// The whole image `file`.
     pub fn image(file: &OutputFile, width: u32, height: u32) -> Result<Sink, ImageError> {
         Ok(match file.format {
-            ImageFormat::Exr => Sink::Exr(ExrFile::create(&file.path, width, height, file.exr_channels())?),
+            ImageFormat::Exr => {
+                Sink::Exr(ExrFile::create(&file.path, width, height, file.exr_channels(), file.exr_compression)?)
+            }
             _ => Sink::Image(ImageFile::create(&file.path, width, height)?),
         })
     }
@@ -147,6 +159,7 @@ mod tests {
             color: Some("c.png".into()),
             normals: None,
             depth: Some(DepthArgs { min: 9.0, max: 11.5, path: depth.into() }),
+            exr_compression: Default::default(),
         };
         let described = |depth| OutputFile::list(&files(depth)).iter().map(OutputFile::describe).collect::<Vec<_>>();
         assert_eq!(described("d.tga"), ["color png", "depth 9 11.5 tga"]);
