@@ -42,13 +42,8 @@ impl GpuRenderer {
     /// while it renders this one, and the next line's `prepare` finds it compiled, or
     /// waits for it. Refuses what `prepare` refuses.
     pub fn precompile(&self, scene: &Scene, options: &RenderOptions, packed: bool) -> Result<(), GpuError> {
-        let traced = unsupported::check(scene, options).map_err(GpuError::Unsupported)?;
-        precision::check(scene, options).map_err(GpuError::Precision)?;
-        let plan = Plan::new(scene, options, traced.secondary());
-        let buffers = flattened(scene, options, &plan.rays);
-        let acceleration = plan.acceleration(&buffers, &self.options);
-        let config = kernel_config(self, &buffers, acceleration, PixelLayout::new(options, packed), options, &traced);
-        Compiled::new(self, config, options, &scene.path).map(drop)
+        let planned = Planned::new(self, scene, options, PixelLayout::new(options, packed))?;
+        Compiled::new(self, planned.config, options, &scene.path).map(drop)
     }
 
     /// Flattens, uploads and binds `scene` for the outputs `options` asks for, once; the
@@ -67,11 +62,7 @@ impl<'a> PreparedScene<'a> {
         layout: PixelLayout,
     ) -> Result<PreparedScene<'a>, GpuError> {
         let start = crate::clock::Instant::now();
-        // Refused before any tile is handed out: `auto` then renders with the reference.
-        let traced = unsupported::check(scene, options).map_err(GpuError::Unsupported)?;
-        precision::check(scene, options).map_err(GpuError::Precision)?;
-        let mut plan = Plan::new(scene, options, traced.secondary());
-        let mut buffers = flattened(scene, options, &plan.rays);
+        let Planned { traced, mut plan, mut buffers, config: planned } = Planned::new(gpu, scene, options, layout)?;
         let config_for =
             |buffers: &SceneBuffers, acceleration| kernel_config(gpu, buffers, acceleration, layout, options, &traced);
         // The kernel is compiled (on lavapipe a cost worth hiding even from the shader cache,
@@ -79,7 +70,6 @@ impl<'a> PreparedScene<'a> {
         // scene and fills the first tile's lists. It is the kernel of the planned way of
         // finding candidates: exact but for bins, whose lists may turn out too long; then the
         // hierarchy's kernel is compiled by `upload` at once, not after the other.
-        let planned = config_for(&buffers, plan.acceleration(&buffers, &gpu.options));
         let (compiled, uploaded) = in_parallel(
             || Compiled::new(gpu, planned, options, &scene.path),
             || {
@@ -97,14 +87,41 @@ impl<'a> PreparedScene<'a> {
             grid_bounds: options.stats.then(|| buffers.grid_world_bounds(plan.rays.center)).flatten(),
             ..uploaded.stats(&buffers)
         };
-        let mut dispatch = uploaded.dispatch(gpu, compiled, &counters, &mut buffers, config, options, layout);
-        dispatch.params.bounces = traced.tree.depth;
+        let params = Params { weight: options.shading.weight as f32, bounces: traced.tree.depth, ..buffers.params };
+        let dispatch = uploaded.dispatch(gpu, compiled, &counters, &mut buffers, (config, params), options, layout);
         Ok(PreparedScene {
             dispatch,
             stats: RenderStats { prepare_ms: start.elapsed().as_secs_f64() * 1e3, ..stats },
             fallback: (config.loop_canary || config.textures).then(|| scene.clone()),
             counters,
         })
+    }
+}
+
+/// A render checked, planned and flattened, and the kernel of its plan: what
+/// [`GpuRenderer::precompile`] compiles and [`PreparedScene::new`] starts from.
+struct Planned {
+    traced: super::ray_tree::RenderRays,
+    plan: Plan,
+    buffers: SceneBuffers,
+    config: KernelConfig,
+}
+
+impl Planned {
+    fn new(
+        gpu: &GpuRenderer,
+        scene: &Scene,
+        options: &RenderOptions,
+        layout: PixelLayout,
+    ) -> Result<Planned, GpuError> {
+        // Refused before any tile is handed out: `auto` then renders with the reference.
+        let traced = unsupported::check(scene, options).map_err(GpuError::Unsupported)?;
+        precision::check(scene, options).map_err(GpuError::Precision)?;
+        let plan = Plan::new(scene, options, traced.secondary());
+        let buffers = flattened(scene, options, &plan.rays);
+        let acceleration = plan.acceleration(&buffers, &gpu.options);
+        let config = kernel_config(gpu, &buffers, acceleration, layout, options, &traced);
+        Ok(Planned { traced, plan, buffers, config })
     }
 }
 
@@ -230,8 +247,8 @@ impl Uploaded {
         }
     }
 
-    /// The tiles' dispatch: each slot bound to the kernel `compiled`, the inputs and the
-    /// counters; the frame's bins taken from `buffers`.
+    /// The tiles' dispatch: each slot bound to the kernel `compiled` (of `config`, with
+    /// `params`), the inputs and the counters; the frame's bins taken from `buffers`.
     #[allow(clippy::too_many_arguments)]
     fn dispatch<'a>(
         self,
@@ -239,7 +256,7 @@ impl Uploaded {
         compiled: Compiled,
         counters: &Counters,
         buffers: &mut SceneBuffers,
-        config: KernelConfig,
+        (config, params): (KernelConfig, Params),
         options: &RenderOptions,
         layout: PixelLayout,
     ) -> Dispatch<'a> {
@@ -255,7 +272,7 @@ impl Uploaded {
             sampled,
             packet: config.packet(),
             layout,
-            params: Params { weight: options.shading.weight as f32, ..buffers.params },
+            params,
             options: *options,
             tile_rows: self.tiling.tile_rows,
             slots,
