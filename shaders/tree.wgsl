@@ -108,27 +108,38 @@ fn push_material_children(surface: Surface, node: Pending, material: Material, s
 }
 
 // The colour seen along a primary ray that hit `surface`: its own shading, then every ray of
-// its tree (without TREE, the shading alone).
+// its tree (without TREE, the shading alone). The primary surface and every later one are
+// shaded at the same call: shade() holds each light's shadow ray, and a second copy of it
+// cost lavapipe's compiler a fifth more time on every kernel with a tree
+// (docs/performance.md, "Compiles"). The sums are the same: the primary surface's
+// throughput is 1 and the colour starts at 0.
 fn color_of_tree(surface: Surface, ray: Ray) -> vec3<f32> {
-    var color = shade(surface, ray);
     if (!TREE) {
-        return color;
+        return shade(surface, ray);
     }
+    var color = vec3<f32>(0.0);
     pending_len = 0u;
-    push_children(surface, Pending(ray, vec3<f32>(1.0), 1.0, 1.0, 0u));
-    while (pending_len > 0u) {
-        let node = pop_pending();
-        let hit = closest_hit(node.ray, 0.0);
-        if (hit.t == NO_HIT) {
+    var node = Pending(ray, vec3<f32>(1.0), 1.0, 1.0, 0u);
+    var next = surface;
+    loop {
+        color += node.throughput * shade(next, node.ray);
+        push_children(next, node);
+        // The next waiting ray that hits a surface; those that miss see the background.
+        loop {
+            if (pending_len == 0u) {
+                return color;
+            }
+            node = pop_pending();
+            let hit = closest_hit(node.ray, 0.0);
+            if (hit.t != NO_HIT) {
+                next = surface_at(hit, node.ray);
+                break;
+            }
             color += node.throughput * P.background;
-            continue;
         }
-        let next = surface_at(hit, node.ray);
         if (TEXTURES) {
             shading_secondary_ray = true;
         }
-        color += node.throughput * shade(next, node.ray);
-        push_children(next, node);
     }
     return color;
 }
