@@ -15,7 +15,7 @@ fn primary_ray(i: u32, j: u32) -> Ray {
 // exactly on a symmetric edge stays exactly on it.
 fn ray_through(x: f32, y: f32) -> Ray {
     let offset = rounded3(x * P.horizontal) + rounded3(y * P.up);
-    if (ORTHOGRAPHIC) {
+    if (orthographic()) {
         return Ray(offset, P.direction);
     }
     return Ray(vec3<f32>(0.0), normalize(P.direction + offset));

@@ -1,4 +1,4 @@
-// uses:
+// uses: host
 // What the host and the kernel share: the `override` switches a pipeline is compiled with,
 // the structs the host uploads (each mirrored by a #[repr(C)] twin in gpu::layout, which
 // tests/layout.rs holds to the same size and offsets). The bindings' declarations are
@@ -14,7 +14,7 @@
 // runs whether taken or not (docs/lavapipe.md), while the host fixes the overrides and cuts
 // the branches they decide before the driver sees the kernel (gpu::specialise), so a
 // pipeline holds only what its scene and outputs need (gpu::KernelConfig), and compiles
-// only that.
+// only that. Small renders are the exception: SHARED_KERNEL below.
 
 override HAS_SPHERES: bool = true;
 override HAS_ELLIPSOIDS: bool = true;
@@ -30,7 +30,7 @@ override WANT_DEPTH: bool = true;
 override PIXEL_WORDS: u32 = 8u;
 override PACKED_8BIT: bool = false;
 // A loop bound fixed at compile time: no light code for a scene without lights, and the
-// loop unrolled for the rest.
+// loop unrolled for the rest (light_count: a shared kernel's is Params.num_lights).
 override NUM_LIGHTS: u32 = 0u;
 // The scene has one material: loaded once per invocation, not at every hit (shading.wgsl).
 override ONE_MATERIAL: bool = false;
@@ -77,6 +77,13 @@ override STATS: bool = false;
 // The course's -visualize_grid (shaders/voxels.wgsl): primary rays see the grid's occupied
 // cells as boxes instead of the scene; bin_ranges holds each cell's (0, items).
 override VOXELS: bool = false;
+// A kernel shared by small renders of different scenes (gpu::KernelConfig::shared): the
+// light count, -shade_back and the kind of camera are read from Params (light_count,
+// shades_back, orthographic below), and point lights, specular colours, several materials
+// and (where the adapter binds every buffer) planes are compiled in whether the scene has
+// them or not. For a small render the driver's compile costs far more than these branches
+// (docs/performance.md, "Compiles").
+override SHARED_KERNEL: bool = false;
 
 const F32_MAX: f32 = 3.40282347e38;
 // The "no hit" distance: never less than any closest-so-far, and what a Closest holds
@@ -120,8 +127,34 @@ struct Params {
     zero_bits: u32,
     // The ray tree's depth (TREE): reflections and refractions on a path, at most.
     bounces: u32,
-    _pad1: u32,
-    _pad2: u32,
+    // The scene's lights (SHARED_KERNEL; otherwise NUM_LIGHTS).
+    num_lights: u32,
+    // SWITCH_SHADE_BACK and SWITCH_ORTHOGRAPHIC (SHARED_KERNEL).
+    switches: u32,
+}
+
+// The lights the shading loops over.
+fn light_count() -> u32 {
+    if (SHARED_KERNEL) {
+        return P.num_lights;
+    }
+    return NUM_LIGHTS;
+}
+
+// -shade_back.
+fn shades_back() -> bool {
+    if (SHARED_KERNEL) {
+        return (P.switches & SWITCH_SHADE_BACK) != 0u;
+    }
+    return SHADE_BACK;
+}
+
+// Whether the camera is orthographic.
+fn orthographic() -> bool {
+    if (SHARED_KERNEL) {
+        return (P.switches & SWITCH_ORTHOGRAPHIC) != 0u;
+    }
+    return ORTHOGRAPHIC;
 }
 
 // A sphere in world space (a similarity transform was baked into it).

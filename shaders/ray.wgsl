@@ -11,7 +11,7 @@ struct Ray {
 // Rays of an orthographic camera start at infinity (negative t is visible, docs/SPEC.md
 // §3); perspective rays start at the eye.
 fn t_min() -> f32 {
-    if (ORTHOGRAPHIC) {
+    if (orthographic()) {
         return -F32_MAX;
     }
     return 0.0;

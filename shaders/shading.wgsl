@@ -75,7 +75,7 @@ fn in_shadow(surface: Surface, n: vec3<f32>, light: Light, arriving: Incoming) -
 // A back face is black unless SHADE_BACK, which shades it with the flipped normal, as the
 // course's -shade_back does.
 fn is_black(surface: Surface, ray: Ray) -> bool {
-    return !SHADE_BACK && dot3(ray.direction, surface.normal) > 0.0;
+    return !shades_back() && dot3(ray.direction, surface.normal) > 0.0;
 }
 
 // The normal turned toward the viewer.
@@ -111,8 +111,8 @@ fn load_shading_data() {
     if (!WANT_COLOR) {
         return;
     }
-    if (NUM_LIGHTS <= LIGHT_CACHE) {
-        for (var k = 0u; k < NUM_LIGHTS; k++) {
+    if (light_count() <= LIGHT_CACHE) {
+        for (var k = 0u; k < light_count(); k++) {
             cached_lights[k] = lights[k];
         }
     }
@@ -122,7 +122,7 @@ fn load_shading_data() {
 }
 
 fn light_at(k: u32) -> Light {
-    if (NUM_LIGHTS <= LIGHT_CACHE) {
+    if (light_count() <= LIGHT_CACHE) {
         return cached_lights[k];
     }
     return lights[k];
@@ -138,7 +138,7 @@ fn material_at(m: u32) -> Material {
 // One Phong material's colour at the surface, n facing the viewer.
 fn shade_phong(material: Material, surface: Surface, n: vec3<f32>, ray: Ray) -> vec3<f32> {
     var color = P.ambient * material.diffuse;
-    for (var k = 0u; k < NUM_LIGHTS; k++) {
+    for (var k = 0u; k < light_count(); k++) {
         let light = light_at(k);
         let arriving = incoming(light, surface.point);
         // A light behind the surface adds nothing, so it needs no shadow ray.

@@ -91,7 +91,7 @@ fn triangle_t_watertight(tri: Triangle, ray: Ray, shear: Shear, tmin: f32) -> f3
 // never hits. The non-short-circuit & and | keep it free of branches.
 fn eye_triangle_t(tri: EyeTriangle, ray: Ray, tmin: f32) -> f32 {
     var q = ray.direction;
-    if (ORTHOGRAPHIC) {
+    if (orthographic()) {
         q = ray.origin;
     }
     let e0 = dot3(tri.rows[0].xyz, q) - tri.rows[0].w;
@@ -101,7 +101,7 @@ fn eye_triangle_t(tri: EyeTriangle, ray: Ray, tmin: f32) -> f32 {
     let plane = tri.rows[3];
     let denominator = dot3(plane.xyz, ray.direction);
     var numerator = plane.w;
-    if (ORTHOGRAPHIC) {
+    if (orthographic()) {
         numerator -= dot3(plane.xyz, ray.origin);
     }
     let t = numerator / select(1.0, denominator, denominator != 0.0);

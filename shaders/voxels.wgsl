@@ -67,7 +67,7 @@ fn voxel_shade(count: u32, point: vec3<f32>, n: vec3<f32>, ray: Ray) -> vec3<f32
     let diffuse = voxel_color(count);
     let material = Material(diffuse, 0.0, vec3<f32>(0.0), 1.0, vec3<f32>(0.0), 0u, vec3<f32>(0.0), 0u);
     var color = P.ambient * diffuse;
-    for (var k = 0u; k < NUM_LIGHTS; k++) {
+    for (var k = 0u; k < light_count(); k++) {
         color += local(material, n, incoming(light_at(k), point), -ray.direction);
     }
     return color;

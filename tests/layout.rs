@@ -82,6 +82,8 @@ fn host_structs_match_the_shader() {
             ("first_bin_row", offset_of!(Params, first_bin_row)),
             ("zero_bits", offset_of!(Params, zero_bits)),
             ("bounces", offset_of!(Params, bounces)),
+            ("num_lights", offset_of!(Params, num_lights)),
+            ("switches", offset_of!(Params, switches)),
         ],
     );
     check(
@@ -277,6 +279,7 @@ fn override_constants_match_the_host() {
         stats: true,
         voxels: true,
         stage: raycaster::gpu::Stage::Pixels,
+        shared: false,
     };
     let mut host: Vec<String> = config.constants().iter().map(|(name, _)| name.to_string()).collect();
     host.sort();

@@ -127,8 +127,7 @@ fn a_kernel_compiled_ahead_is_compiled_once() {
     assert_eq!(gpu.kernels_compiled(), 1);
     gpu.prepare(&scene, &options, true).unwrap();
     assert_eq!(gpu.kernels_compiled(), 1, "the render found the kernel compiled ahead");
-    let wider =
-        RenderOptions { shading: raycaster::render::Shading { shade_back: true, ..options.shading }, ..options };
+    let wider = RenderOptions { outputs: raycaster::render::Outputs::ALL, ..options };
     std::thread::scope(|scope| {
         scope.spawn(|| gpu.precompile(&scene, &wider, true).unwrap());
         scope.spawn(|| gpu.prepare(&scene, &wider, true).map(drop).unwrap());

@@ -55,7 +55,16 @@ pub struct KernelConfig {
     pub voxels: bool,
     /// Which of the kernel's passes this pipeline runs.
     pub stage: Stage,
+    /// A kernel shared by small renders of different scenes ([`KernelConfig::shared`]).
+    pub shared: bool,
 }
+
+/// Renders of at most this many samples (pixels × samples per pixel) share kernels
+/// ([`KernelConfig::shared`]): assignment 4's 200² lines compile 6 kernels instead of 13 on
+/// lavapipe. The branches a shared kernel keeps cost the heaviest of those lines 5 % of its
+/// kernel's time; at this size that is about 50 ms, where compiling a kernel of its own
+/// costs lavapipe 0.1 to 2 s (docs/performance.md, "Compiles").
+pub const SHARED_KERNEL_MAX_SAMPLES: u64 = 512 * 512;
 
 /// The kernel's passes: one pass for a pixel's centre sample, or, with sampling
 /// (docs/SPEC.md §8), a pass tracing every sample and a pass filtering them.
@@ -113,6 +122,7 @@ impl KernelConfig {
             stats: options.stats,
             voxels: options.visualize_grid,
             stage: Stage::Pixels,
+            shared: false,
         };
         // Every pixel, whatever it casts: a hierarchy that cannot cull (slivers across the
         // view), a crowded bin, a flat loop or a texture's blend passes the limit.
@@ -122,6 +132,36 @@ impl KernelConfig {
             !config.has_spheres && !config.has_ellipsoids && config.triangle_test == TriangleTest::Watertight;
         config.shared_bin_loads = shared_loads && config.use_bins && eye_only;
         config
+    }
+
+    /// This kernel as small renders share it, where it can be shared: the light count,
+    /// `-shade_back` and the kind of camera read from `Params` (`num_lights`, `switches`),
+    /// and point lights, specular colours and several materials compiled in whether the
+    /// scene has them or not (each already decided per light or material at run time, so
+    /// the image is the same). Many scenes then run one kernel, and the driver compiles it
+    /// once. Bins, the grid and `-visualize_grid` keep their own kernels: they serve large
+    /// renders, or their compiled-in camera is in the hot loop.
+    ///
+    /// Where the adapter takes every binding (`every_binding`,
+    /// [`GpuRenderer::binds_every_buffer`](super::GpuRenderer::binds_every_buffer)), planes
+    /// are compiled in too, and a scene without lights shares as well. Elsewhere the shared
+    /// kernel binds only what the scene's own binds: planes and the lights' buffer would be
+    /// a binding more, past a limit the scene's own kernel keeps within.
+    pub fn shared(self, every_binding: bool) -> KernelConfig {
+        if self.use_bins || self.use_grid || self.voxels || (self.num_lights == 0 && !every_binding) {
+            return self;
+        }
+        KernelConfig {
+            shared: true,
+            num_lights: 0,
+            shade_back: false,
+            orthographic: false,
+            specular: true,
+            point_lights: true,
+            one_material: false,
+            has_planes: self.has_planes || every_binding,
+            ..self
+        }
     }
 
     /// Pixels each invocation renders, stacked in a column (the kernel's `PACKET` in
@@ -156,7 +196,7 @@ impl KernelConfig {
     }
 
     /// The values for `PipelineCompilationOptions::constants`.
-    pub fn constants(&self) -> [(&'static str, f64); 27] {
+    pub fn constants(&self) -> [(&'static str, f64); 28] {
         let b = |v: bool| if v { 1.0 } else { 0.0 };
         [
             ("HAS_SPHERES", b(self.has_spheres)),
@@ -186,6 +226,7 @@ impl KernelConfig {
             ("TEXTURES", b(self.textures)),
             ("STATS", b(self.stats)),
             ("VOXELS", b(self.voxels)),
+            ("SHARED_KERNEL", b(self.shared)),
         ]
     }
 
@@ -196,5 +237,73 @@ impl KernelConfig {
             return specialise::specialise(&shader::fused_module().0, &self.constants(), self.entry_point());
         }
         specialise::specialise(shader::module(), &self.constants(), self.entry_point())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::render::{Outputs, SphereTest, TriangleTest};
+
+    /// Where the adapter does not take every binding, a shared kernel binds exactly the
+    /// buffers its scene's own kernel binds: sharing must never take a scene past the
+    /// adapter's limit. Where it does, planes are shared too.
+    #[test]
+    fn a_shared_kernel_binds_what_its_own_kernel_binds() {
+        let own = KernelConfig {
+            has_spheres: false,
+            has_ellipsoids: false,
+            has_planes: false,
+            has_triangles: false,
+            orthographic: false,
+            pixel_layout: PixelLayout { outputs: Outputs::ALL, packed: true },
+            num_lights: 1,
+            one_material: true,
+            shade_back: false,
+            specular: false,
+            specular_fix: false,
+            point_lights: false,
+            shadows: false,
+            tree: false,
+            loop_canary: false,
+            triangle_test: TriangleTest::Watertight,
+            sphere_test: SphereTest::Robust,
+            use_bvh: false,
+            use_bins: false,
+            shared_bin_loads: false,
+            use_grid: false,
+            textures: false,
+            stats: false,
+            voxels: false,
+            stage: Stage::Pixels,
+            shared: false,
+        };
+        let mut checked = 0;
+        for bits in 0u32..64 {
+            let bit = |k: u32| bits & (1 << k) != 0;
+            let config = KernelConfig {
+                has_spheres: bit(0),
+                has_planes: bit(1),
+                has_triangles: bit(2) || !bit(0),
+                tree: bit(3),
+                shadows: bit(4),
+                use_bvh: bit(5),
+                num_lights: 1 + bits % 3,
+                ..own
+            };
+            let referenced = |c: &KernelConfig| super::super::bindings::referenced(&c.module());
+            let within_limits = config.shared(false);
+            assert!(within_limits.shared);
+            assert_eq!(referenced(&within_limits), referenced(&config), "{config:?}");
+            let roomy = config.shared(true);
+            assert!(roomy.shared && roomy.has_planes);
+            let planes = 1 << super::super::Binding::Planes.index();
+            assert_eq!(referenced(&roomy), referenced(&config) | planes, "{config:?}");
+            checked += 1;
+        }
+        let no_lights = KernelConfig { num_lights: 0, ..own };
+        assert_eq!(no_lights.shared(false), no_lights, "a scene without lights keeps its own kernel");
+        assert!(no_lights.shared(true).shared);
+        assert_eq!(checked, 64);
     }
 }

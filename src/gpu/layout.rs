@@ -45,9 +45,18 @@ pub struct Params {
     /// The ray tree's depth ([`TreeShape::depth`](super::ray_tree::TreeShape::depth)), with
     /// the kernel's `TREE`: a value, so that each depth compiles no kernel of its own.
     pub bounces: u32,
-    pub _pad1: u32,
-    pub _pad2: u32,
+    /// The scene's lights: the light loop's count in a kernel shared by small renders
+    /// (`SHARED_KERNEL`; other kernels have it compiled in as `NUM_LIGHTS`).
+    pub num_lights: u32,
+    /// [`SWITCH_SHADE_BACK`] and [`SWITCH_ORTHOGRAPHIC`]: what a kernel shared by small
+    /// renders reads here instead of its own `SHADE_BACK` and `ORTHOGRAPHIC`.
+    pub switches: u32,
 }
+
+/// `Params::switches`: `-shade_back`.
+pub const SWITCH_SHADE_BACK: u32 = 1;
+/// `Params::switches`: the camera is orthographic.
+pub const SWITCH_ORTHOGRAPHIC: u32 = 2;
 
 /// WGSL `Sampling` (shaders/sampling.wgsl): the sampler, the filter, and the rows of samples
 /// one tile holds (docs/SPEC.md §8).

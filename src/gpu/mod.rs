@@ -49,7 +49,7 @@ mod workgroup;
 
 pub use bindings::Binding;
 pub use error::GpuError;
-pub use kernel::{KernelConfig, Stage};
+pub use kernel::{KernelConfig, Stage, SHARED_KERNEL_MAX_SAMPLES};
 pub use options::{Acceleration, GpuOptions, MAX_TILE_BYTES};
 pub use prepared::PreparedScene;
 pub use readback::ReadTile;

@@ -30,6 +30,11 @@ pub struct GpuOptions {
     /// copies through staging and readback buffers, as on a discrete GPU, for tests to
     /// compare the two.
     pub mapped_buffers: bool,
+    /// Let renders of at most [`SHARED_KERNEL_MAX_SAMPLES`](super::kernel::SHARED_KERNEL_MAX_SAMPLES)
+    /// samples run a kernel shared with other scenes ([`KernelConfig::shared`](super::KernelConfig::shared)),
+    /// so that a batch of small renders compiles few kernels; false compiles each its own, for
+    /// tests to compare the two, and for the window, which renders one scene at many sizes.
+    pub share_small_kernels: bool,
 }
 
 impl Default for GpuOptions {
@@ -40,6 +45,7 @@ impl Default for GpuOptions {
             acceleration: Acceleration::Auto,
             shared_bin_loads: true,
             mapped_buffers: true,
+            share_small_kernels: true,
         }
     }
 }

@@ -12,7 +12,7 @@ use super::dispatch::Dispatch;
 use super::error::GpuError;
 use super::flatten::{self, GridChoice, SceneBuffers};
 use super::kernel::KernelConfig;
-use super::layout::{GpuTexture, Params, PixelLayout};
+use super::layout::{GpuTexture, Params, PixelLayout, SWITCH_SHADE_BACK};
 use super::parallel::in_parallel;
 use super::readback::Counters;
 use super::renderer::{Compiled, GpuRenderer};
@@ -87,7 +87,12 @@ impl<'a> PreparedScene<'a> {
             grid_bounds: options.stats.then(|| buffers.grid_world_bounds(plan.rays.center)).flatten(),
             ..uploaded.stats(&buffers)
         };
-        let params = Params { weight: options.shading.weight as f32, bounces: traced.tree.depth, ..buffers.params };
+        let params = Params {
+            weight: options.shading.weight as f32,
+            bounces: traced.tree.depth,
+            switches: buffers.params.switches | if options.shading.shade_back { SWITCH_SHADE_BACK } else { 0 },
+            ..buffers.params
+        };
         let dispatch = uploaded.dispatch(gpu, compiled, &counters, &mut buffers, (config, params), options, layout);
         Ok(PreparedScene {
             dispatch,
@@ -135,7 +140,13 @@ fn kernel_config(
     traced: &super::ray_tree::RenderRays,
 ) -> KernelConfig {
     let (loop_limit, shared_loads) = (gpu.loop_limit().is_some(), gpu.shares_bin_loads());
-    KernelConfig::new(buffers, acceleration, layout, options, traced, loop_limit, shared_loads)
+    let config = KernelConfig::new(buffers, acceleration, layout, options, traced, loop_limit, shared_loads);
+    let samples = options.pixel_count() as u64 * options.sampling.map_or(1, |s| s.count()) as u64;
+    if gpu.options.share_small_kernels && samples <= super::kernel::SHARED_KERNEL_MAX_SAMPLES {
+        config.shared(gpu.binds_every_buffer())
+    } else {
+        config
+    }
 }
 
 /// What a scene's render casts, and where it finds its candidates.

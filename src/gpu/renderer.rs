@@ -222,6 +222,13 @@ impl GpuRenderer {
             && info.subgroup_max_size == binning::BIN_COLUMNS
     }
 
+    /// Whether every kernel binds all its buffers here: the adapter's limit takes every
+    /// [`Binding`], as lavapipe's and desktop GPUs' do (SwiftShader's 10 and WebGPU's default
+    /// 8 do not).
+    pub(super) fn binds_every_buffer(&self) -> bool {
+        self.all_bindings.is_some()
+    }
+
     /// The bindings the kernels `stages` of a scene in `file` use: all of them, or where
     /// the adapter offers fewer ([`bindings`]) those the kernels reference, refused when
     /// they are still too many.

@@ -88,6 +88,8 @@ pub fn host_constants() -> String {
         ),
         ("STATS_SLOTS", super::layout::STATS_SLOTS, "slots of the -stats counters (gpu::layout)"),
         ("STATS_WORDS", super::layout::STATS_WORDS, "words of one slot of the -stats counters (gpu::layout)"),
+        ("SWITCH_SHADE_BACK", super::layout::SWITCH_SHADE_BACK, "Params.switches: -shade_back (gpu::layout)"),
+        ("SWITCH_ORTHOGRAPHIC", super::layout::SWITCH_ORTHOGRAPHIC, "Params.switches: an orthographic camera"),
     ];
     for (name, value, what) in sizes {
         let _ = writeln!(out, "// {what}\nconst {name}: u32 = {value}u;");

@@ -42,8 +42,13 @@ impl Screen {
                 _ => None,
             })
             .ok_or_else(|| format!("no 8-bit linear surface format among {:?}", caps.formats))?;
-        let gpu =
-            pollster::block_on(GpuRenderer::on_adapter(&adapter, GpuOptions::default())).map_err(|e| e.to_string())?;
+        // One scene at many sizes: a moving camera's small frames would otherwise run a
+        // shared kernel, and the first drag would wait for a second compile.
+        let gpu = pollster::block_on(GpuRenderer::on_adapter(
+            &adapter,
+            GpuOptions { share_small_kernels: false, ..GpuOptions::default() },
+        ))
+        .map_err(|e| e.to_string())?;
         let config = wgpu::SurfaceConfiguration {
             usage: wgpu::TextureUsages::COPY_DST,
             format,
