@@ -121,7 +121,6 @@ impl SceneBuffers {
             num_triangles: buffers.triangles.len() as u32,
             loop_canary_trips: LOOP_CANARY_TRIPS,
             num_lights: buffers.lights.len() as u32,
-            switches: if rays.orthographic { SWITCH_ORTHOGRAPHIC } else { 0 },
             ..Default::default()
         };
         buffers

@@ -243,67 +243,49 @@ impl KernelConfig {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::render::{Outputs, SphereTest, TriangleTest};
+    use crate::render::Shading;
+
+    /// The kernel of a small scene with a sphere, a triangle and one light, from the host's
+    /// own steps (flattened buffers, the rays the options trace), as a render would have it.
+    fn scene_config(shading: Shading, acceleration: Acceleration) -> KernelConfig {
+        let text = "OrthographicCamera { center 0 0 5 direction 0 0 -1 up 0 1 0 size 4 }
+            Lights { numLights 1 DirectionalLight { direction 0 0 -1 color 1 1 1 } }
+            Background { color 0 0 0 ambientLight 0.1 0.1 0.1 }
+            Materials { numMaterials 1 PhongMaterial { diffuseColor 0.5 0.5 0.5 } }
+            Group { numObjects 2 MaterialIndex 0 Sphere { center 0 0 0 radius 1 }
+              Triangle { vertex0 -2 -2 -1 vertex1 2 -2 -1 vertex2 0 2 -1 } }";
+        let scene = crate::scene::parse_scene(text, std::path::Path::new("kernel.txt")).unwrap();
+        let options = RenderOptions { shading, ..RenderOptions::all(16, 16) };
+        let rays = crate::camera::PrimaryRays::for_camera(&scene.camera, 16, 16);
+        let buffers = SceneBuffers::flattened(&scene, &rays);
+        let traced = super::super::unsupported::check(&scene, &options).unwrap();
+        KernelConfig::new(&buffers, acceleration, PixelLayout::new(&options, true), &options, &traced, false, false)
+    }
 
     /// Where the adapter does not take every binding, a shared kernel binds exactly the
     /// buffers its scene's own kernel binds: sharing must never take a scene past the
     /// adapter's limit. Where it does, planes are shared too.
     #[test]
     fn a_shared_kernel_binds_what_its_own_kernel_binds() {
-        let own = KernelConfig {
-            has_spheres: false,
-            has_ellipsoids: false,
-            has_planes: false,
-            has_triangles: false,
-            orthographic: false,
-            pixel_layout: PixelLayout { outputs: Outputs::ALL, packed: true },
-            num_lights: 1,
-            one_material: true,
-            shade_back: false,
-            specular: false,
-            specular_fix: false,
-            point_lights: false,
-            shadows: false,
-            tree: false,
-            loop_canary: false,
-            triangle_test: TriangleTest::Watertight,
-            sphere_test: SphereTest::Robust,
-            use_bvh: false,
-            use_bins: false,
-            shared_bin_loads: false,
-            use_grid: false,
-            textures: false,
-            stats: false,
-            voxels: false,
-            stage: Stage::Pixels,
-            shared: false,
-        };
-        let mut checked = 0;
-        for bits in 0u32..64 {
-            let bit = |k: u32| bits & (1 << k) != 0;
-            let config = KernelConfig {
-                has_spheres: bit(0),
-                has_planes: bit(1),
-                has_triangles: bit(2) || !bit(0),
-                tree: bit(3),
-                shadows: bit(4),
-                use_bvh: bit(5),
-                num_lights: 1 + bits % 3,
-                ..own
-            };
-            let referenced = |c: &KernelConfig| super::super::bindings::referenced(&c.module());
-            let within_limits = config.shared(false);
-            assert!(within_limits.shared);
-            assert_eq!(referenced(&within_limits), referenced(&config), "{config:?}");
-            let roomy = config.shared(true);
-            assert!(roomy.shared && roomy.has_planes);
-            let planes = 1 << super::super::Binding::Planes.index();
-            assert_eq!(referenced(&roomy), referenced(&config) | planes, "{config:?}");
-            checked += 1;
+        let tree = Shading { shadows: true, bounces: 2, ..Shading::default() };
+        let referenced = |c: &KernelConfig| super::super::bindings::referenced(&c.module());
+        let planes = 1 << super::super::Binding::Planes.index();
+        for shading in [Shading::default(), Shading { shadows: true, ..Shading::default() }, tree] {
+            for acceleration in [Acceleration::Flat, Acceleration::Hierarchy] {
+                let own = scene_config(shading, acceleration);
+                for (has_spheres, has_triangles, num_lights) in [(true, true, 1), (false, true, 3), (true, false, 2)] {
+                    let config = KernelConfig { has_spheres, has_triangles, num_lights, ..own };
+                    let within_limits = config.shared(false);
+                    assert!(within_limits.shared);
+                    assert_eq!(referenced(&within_limits), referenced(&config), "{config:?}");
+                    let roomy = config.shared(true);
+                    assert!(roomy.shared && roomy.has_planes);
+                    assert_eq!(referenced(&roomy), referenced(&config) | planes, "{config:?}");
+                }
+            }
         }
-        let no_lights = KernelConfig { num_lights: 0, ..own };
+        let no_lights = KernelConfig { num_lights: 0, ..scene_config(Shading::default(), Acceleration::Flat) };
         assert_eq!(no_lights.shared(false), no_lights, "a scene without lights keeps its own kernel");
         assert!(no_lights.shared(true).shared);
-        assert_eq!(checked, 64);
     }
 }

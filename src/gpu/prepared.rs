@@ -12,7 +12,7 @@ use super::dispatch::Dispatch;
 use super::error::GpuError;
 use super::flatten::{self, GridChoice, SceneBuffers};
 use super::kernel::KernelConfig;
-use super::layout::{GpuTexture, Params, PixelLayout, SWITCH_SHADE_BACK};
+use super::layout::{GpuTexture, Params, PixelLayout, SWITCH_ORTHOGRAPHIC, SWITCH_SHADE_BACK};
 use super::parallel::in_parallel;
 use super::readback::Counters;
 use super::renderer::{Compiled, GpuRenderer};
@@ -90,7 +90,7 @@ impl<'a> PreparedScene<'a> {
         let params = Params {
             weight: options.shading.weight as f32,
             bounces: traced.tree.depth,
-            switches: buffers.params.switches | if options.shading.shade_back { SWITCH_SHADE_BACK } else { 0 },
+            switches: switches(buffers.orthographic, options.shading.shade_back),
             ..buffers.params
         };
         let dispatch = uploaded.dispatch(gpu, compiled, &counters, &mut buffers, (config, params), options, layout);
@@ -101,6 +101,11 @@ impl<'a> PreparedScene<'a> {
             counters,
         })
     }
+}
+
+/// `Params::switches`: what a shared kernel reads instead of compiling it in.
+fn switches(orthographic: bool, shade_back: bool) -> u32 {
+    (if orthographic { SWITCH_ORTHOGRAPHIC } else { 0 }) | if shade_back { SWITCH_SHADE_BACK } else { 0 }
 }
 
 /// A render checked, planned and flattened, and the kernel of its plan: what
