@@ -18,7 +18,6 @@ use crate::app::exit::{say, Failure};
 use crate::app::job;
 use orbit::Orbit;
 use present::Screen;
-use raycaster::gpu::GpuOptions;
 use raycaster::image_io;
 use raycaster::render::{Frame, Output, Outputs};
 use raycaster::renderer::Renderer;
@@ -151,7 +150,7 @@ impl<'a> LiveView<'a> {
             event_loop.create_window(attributes).map_err(|e| Ended::NoWindow(format!("cannot open a window: {e}")))?,
         );
         let screen = Screen::open(window.clone()).map_err(Ended::NoWindow)?;
-        let backend = Renderer::on_gpu(screen.gpu().on_same_device(GpuOptions::default()), self.args.backend);
+        let backend = Renderer::on_gpu(screen.gpu().on_same_device(*screen.gpu().options()), self.args.backend);
         if self.verbose {
             say(&format!("gui: {}; keys: c n d (colour, normals, depth), r (write the files), q", backend.describe()));
         }
