@@ -287,6 +287,35 @@ fn a_plane_seen_to_the_horizon_hands_its_far_pixels_to_the_reference() {
     }
 }
 
+/// The live window draws such a frame from the host: drawn on the device, the pixels
+/// handed over would show the kernel's marker, so the pass says it met one.
+#[test]
+fn a_frame_with_pixels_handed_over_is_not_drawn_on_the_device() {
+    let Some(gpu) = common::gpu() else { return };
+    let scene = grazing_checker();
+    let options = RenderOptions {
+        outputs: raycaster::render::Outputs::from(raycaster::render::Output::Color),
+        ..RenderOptions::all(96, 160)
+    };
+    let texture = gpu.device().create_texture(&wgpu::TextureDescriptor {
+        label: None,
+        size: wgpu::Extent3d { width: 96, height: 160, depth_or_array_layers: 1 },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: wgpu::TextureFormat::Rgba8Unorm,
+        usage: wgpu::TextureUsages::COPY_DST,
+        view_formats: &[],
+    });
+    let presenter = raycaster::gpu::Presenter::new(gpu);
+    let prepared = gpu.prepare(&scene, &options, true).expect("the GPU prepares the scene");
+    assert_eq!(prepared.present(&presenter, &texture, 1).unwrap(), raycaster::gpu::Presented::HandedOver);
+    // The flag is the frame's: the checkerboard seen from above, next, is drawn.
+    let near = parse_scene(CHECKER_SCENE, Path::new("checker.txt")).unwrap();
+    let prepared = gpu.prepare(&near, &options, true).expect("the GPU prepares the scene");
+    assert_eq!(prepared.present(&presenter, &texture, 1).unwrap(), raycaster::gpu::Presented::Drawn);
+}
+
 /// A checkerboard of a diffuse material and a mirror with a little glass in it, under a
 /// red sphere the mirror cells reflect, and a sphere of noise blending glass and a mirror:
 /// a texture's materials each spawn their own rays, weighted by their share.

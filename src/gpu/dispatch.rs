@@ -4,7 +4,7 @@
 use super::binning::Bins;
 use super::layout::{GpuSampling, Params, PixelLayout};
 use super::renderer::{GpuRenderer, Sampled};
-use super::tiles::TileSlot;
+use super::tiles::{TileBuffers, TileSlot};
 use super::workgroup::WORKGROUP;
 use crate::render::RenderOptions;
 #[cfg(not(target_arch = "wasm32"))]
@@ -80,13 +80,30 @@ impl Dispatch<'_> {
     /// Dispatches one tile into `slot`, and copies it to the slot's readback buffer where
     /// it has one.
     pub fn submit_tile(&self, slot: usize, first_row: u32, rows: u32) -> wgpu::SubmissionIndex {
+        let size = self.tile_bytes(rows);
+        self.submit_tile_then(slot, first_row, rows, |encoder, s| {
+            if let Some(readback) = &s.readback {
+                encoder.copy_buffer_to_buffer(&s.output, 0, readback, 0, size);
+            }
+        })
+    }
+
+    /// Dispatches one tile into `slot`, then what `then` records on the slot's buffers (a
+    /// copy for the host, or the pass that draws the tile onto a texture, `gpu::present`),
+    /// in one submission.
+    pub fn submit_tile_then(
+        &self,
+        slot: usize,
+        first_row: u32,
+        rows: u32,
+        then: impl FnOnce(&mut wgpu::CommandEncoder, &TileBuffers),
+    ) -> wgpu::SubmissionIndex {
         let gpu = self.gpu;
         let (traced_first, traced_rows) = self.traced_rows(first_row, rows);
         let first_bin_row = self.upload_band(slot, traced_first, traced_rows);
         let (s, bind_group) = (&self.slots[slot].buffers, &self.slots[slot].bind_group);
         let params = Params { first_row, tile_rows: rows, first_bin_row, ..self.params };
         gpu.queue.write_buffer(&s.params, 0, bytemuck::bytes_of(&params));
-        let size = self.tile_bytes(rows);
         let mut encoder = gpu.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("raycast") });
         {
             let timestamp_writes = s.timer.as_ref().map(|t| wgpu::ComputePassTimestampWrites {
@@ -104,9 +121,7 @@ impl Dispatch<'_> {
                 }
             }
         }
-        if let Some(readback) = &s.readback {
-            encoder.copy_buffer_to_buffer(&s.output, 0, readback, 0, size);
-        }
+        then(&mut encoder, s);
         if let Some(timer) = &s.timer {
             timer.resolve(&mut encoder);
         }

@@ -14,7 +14,8 @@
 //! its compiled kernels); `upload`, `tiles`, `dispatch` and `readback` (a scene's buffers,
 //! its tiles in flight, a tile's dispatch, what the host reads back); `handover` (pixels
 //! given to the reference); `prepared` (a scene made ready) and `tile_loop` (its tiles
-//! rendered, on a thread of ours or awaited in a browser).
+//! rendered, on a thread of ours or awaited in a browser); `present` (its tiles drawn onto
+//! a texture on the device, for the live window).
 
 mod bindings;
 pub mod binning;
@@ -33,6 +34,8 @@ pub mod pipeline_cache;
 pub mod precision;
 mod precision_error;
 mod prepared;
+#[cfg(not(target_arch = "wasm32"))]
+mod present;
 pub mod ray_tree;
 mod readback;
 mod renderer;
@@ -52,6 +55,8 @@ pub use error::GpuError;
 pub use kernel::{KernelConfig, Stage, SHARED_KERNEL_MAX_SAMPLES};
 pub use options::{Acceleration, GpuOptions, MAX_TILE_BYTES};
 pub use prepared::PreparedScene;
+#[cfg(not(target_arch = "wasm32"))]
+pub use present::{Presented, Presenter};
 pub use readback::ReadTile;
 pub use renderer::GpuRenderer;
 pub use tiles::MAX_SAMPLE_BYTES;
