@@ -78,12 +78,19 @@ fn the_window_shows_the_render_and_the_mouse_turns_its_camera() {
         dir.path(),
         &["-input", "scene.txt", "-size", &size[0], &size[1], "-output", "written.tga", "-gui", "-v"],
     );
-    window.wait_for(&format!("colour frame {WIDTH}x{HEIGHT}"));
+    // Colour and normals are drawn on the device, the frame never crossing to the host.
+    let first = window.wait_for(&format!("colour frame {WIDTH}x{HEIGHT}"));
+    assert!(first.ends_with("drawn on the device"), "{first}");
     within_contract("the first frame", &window.screenshot(), &colour);
 
     window.xdotool(&["key", "n"]);
-    window.wait_for(&format!("normals frame {WIDTH}x{HEIGHT}"));
+    let line = window.wait_for(&format!("normals frame {WIDTH}x{HEIGHT}"));
+    assert!(line.ends_with("drawn on the device"), "{line}");
     within_contract("the normals", &window.screenshot(), &normals);
+    // The depth's range comes from the frame's hits, on the host.
+    window.xdotool(&["key", "d"]);
+    let line = window.wait_for(&format!("depth frame {WIDTH}x{HEIGHT}"));
+    assert!(line.ends_with("drawn from the host"), "{line}");
 
     window.xdotool(&["key", "c"]);
     window.wait_for(&format!("colour frame {WIDTH}x{HEIGHT}"));
@@ -211,12 +218,12 @@ impl LiveView {
         String::from_utf8(output.stdout).unwrap()
     }
 
-    /// Reads stderr until a line containing `needle`.
-    fn wait_for(&mut self, needle: &str) {
+    /// Reads stderr until a line containing `needle`; returns it.
+    fn wait_for(&mut self, needle: &str) -> String {
         let mut seen = Vec::new();
         loop {
             match self.lines.recv_timeout(PATIENCE) {
-                Ok(line) if line.contains(needle) => return,
+                Ok(line) if line.contains(needle) => return line,
                 Ok(line) => seen.push(line),
                 Err(e) => {
                     let _ = self.process.kill();

@@ -18,8 +18,9 @@ use crate::app::exit::{say, Failure};
 use crate::app::job;
 use orbit::Orbit;
 use present::Screen;
+use raycaster::gpu::{GpuRenderer, Presented};
 use raycaster::image_io;
-use raycaster::render::{Frame, Output, Outputs};
+use raycaster::render::{Frame, Output, Outputs, RenderOptions};
 use raycaster::renderer::Renderer;
 use raycaster::scene::Scene;
 use std::sync::Arc;
@@ -169,8 +170,13 @@ impl<'a> LiveView<'a> {
         let scale = if moving { moving_scale(self.full_frame) } else { 1 };
         let (w, h) = (width.div_ceil(scale), height.div_ceil(scale));
         let start = Instant::now();
-        let rgb = render_view(backend, &self.scene, self.args, self.output, (w, h))?;
-        let shown = screen.show(&enlarge(&rgb, (w, h), (width, height)));
+        let Some(frame) = screen.next_texture() else { return Ok(()) };
+        let on_device = draw_on_device(screen, backend, &self.scene, self.args, self.output, scale, &frame)?;
+        if !on_device {
+            let rgb = render_view(backend, &self.scene, self.args, self.output, (w, h))?;
+            screen.write(&frame, &enlarge(&rgb, w, scale, (width, height)));
+        }
+        screen.present(frame);
         let took = start.elapsed();
         if self.scales_seen.contains(&scale) || self.scales_seen.is_empty() {
             // A frame's time goes with its pixels.
@@ -180,8 +186,13 @@ impl<'a> LiveView<'a> {
             self.scales_seen.push(scale);
         }
         self.timings.add(scale, took);
-        if self.verbose && shown {
-            say(&format!("gui: {} frame {w}x{h} in {:.1} ms", self.output.name(), took.as_secs_f64() * 1e3));
+        if self.verbose {
+            let path = if on_device { "on the device" } else { "from the host" };
+            say(&format!(
+                "gui: {} frame {w}x{h} in {:.1} ms, drawn {path}",
+                self.output.name(),
+                took.as_secs_f64() * 1e3
+            ));
         }
         Ok(())
     }
@@ -195,7 +206,17 @@ impl<'a> LiveView<'a> {
         // The reference compiles nothing.
         let Some((_, backend @ Renderer::Gpu(..))) = self.screen.as_ref() else { return Ok(()) };
         let start = Instant::now();
-        render_view(backend, &self.scene, self.args, self.output, (WARM_UP_SIDE, WARM_UP_SIDE))?;
+        let options = view_options(self.args, self.output, (WARM_UP_SIDE, WARM_UP_SIDE));
+        // The kernel the frames drawn on the device run (8-bit pixels), where they are.
+        match device_drawn(backend, &self.scene, &options).and_then(|gpu| gpu.prepare(&self.scene, &options, true).ok())
+        {
+            Some(prepared) => {
+                prepared.render(|_| Ok::<(), Failure>(()))?;
+            }
+            None => {
+                render_view(backend, &self.scene, self.args, self.output, (WARM_UP_SIDE, WARM_UP_SIDE))?;
+            }
+        }
         if self.verbose {
             say(&format!("gui: compiled the moving frames' kernel in {:.0} ms", start.elapsed().as_secs_f64() * 1e3));
         }
@@ -367,6 +388,47 @@ fn moving_scale(full_frame: Duration) -> u32 {
     (ratio.sqrt().ceil() as u32).clamp(1, 8)
 }
 
+/// The render of one output of the view at `size`.
+fn view_options(args: &RenderArgs, output: Output, (width, height): (u32, u32)) -> RenderOptions {
+    let mut options = job::options_for(args);
+    options.width = width;
+    options.height = height;
+    options.outputs = Outputs::from(output);
+    options.stats = false;
+    options
+}
+
+/// The GPU that draws the render `options` on the device, where one does: colour and
+/// normals, whose 8-bit images the kernel computes whole (the depth's range comes from the
+/// frame's hits, on the host), rendered by the GPU (`auto` may hand a scene to the
+/// reference).
+fn device_drawn<'r>(backend: &'r Renderer, scene: &Scene, options: &RenderOptions) -> Option<&'r GpuRenderer> {
+    let drawable = options.outputs.contains(Output::Color) || options.outputs.contains(Output::Normals);
+    let (renderer, _) = backend.for_scene(scene, options);
+    renderer.gpu().filter(|_| drawable)
+}
+
+/// Renders the view at the frame's size divided by `scale` and draws it onto `frame` on the
+/// device, without the pixels crossing to the host; returns false where it cannot (see
+/// [`device_drawn`]; the GPU refuses the scene, which the host's path then reports or
+/// hands to the reference; or a pixel was handed over to the reference), for the caller
+/// to draw the frame from the host.
+fn draw_on_device(
+    screen: &Screen,
+    backend: &Renderer,
+    scene: &Scene,
+    args: &RenderArgs,
+    output: Output,
+    scale: u32,
+    frame: &wgpu::SurfaceTexture,
+) -> Result<bool, Failure> {
+    let (width, height) = screen.size();
+    let options = view_options(args, output, (width.div_ceil(scale), height.div_ceil(scale)));
+    let Some(gpu) = device_drawn(backend, scene, &options) else { return Ok(false) };
+    let Ok(prepared) = gpu.prepare(scene, &options, true) else { return Ok(false) };
+    Ok(prepared.present(screen.presenter(), &frame.texture, scale)? == Presented::Drawn)
+}
+
 /// One output of `scene` at `size`, as the 8-bit RGB bytes its file would hold. Depth is
 /// shown over the command line's `-depth` range, else over the nearest and farthest hits.
 fn render_view(
@@ -374,15 +436,11 @@ fn render_view(
     scene: &Scene,
     args: &RenderArgs,
     output: Output,
-    (width, height): (u32, u32),
+    size: (u32, u32),
 ) -> Result<Vec<u8>, Failure> {
-    let mut options = job::options_for(args);
-    options.width = width;
-    options.height = height;
-    options.outputs = Outputs::from(output);
-    options.stats = false;
+    let options = view_options(args, output, size);
     let mut tiles = Vec::new();
-    let (_, _) = backend.render_band(scene, &options, 0, height, |_, frame| {
+    let (_, _) = backend.render_band(scene, &options, 0, options.height, |_, frame| {
         tiles.push(frame);
         Ok::<(), Failure>(())
     })?;
@@ -410,16 +468,18 @@ fn hit_depths(tiles: &[Frame]) -> (f32, f32) {
     }
 }
 
-/// `rgb`, of size `from`, enlarged to `to` by repeating pixels (nearest neighbour).
-fn enlarge(rgb: &[u8], from: (u32, u32), to: (u32, u32)) -> Vec<u8> {
-    if from == to {
+/// `rgb`, `width` pixels wide, enlarged onto an image of size `to`: each pixel a
+/// `scale × scale` block from the top left, cut at `to`'s edges (as the device draws it,
+/// `shaders/present/enlarge.wgsl`).
+fn enlarge(rgb: &[u8], width: u32, scale: u32, to: (u32, u32)) -> Vec<u8> {
+    if scale == 1 && width == to.0 {
         return rgb.to_vec();
     }
     let mut out = Vec::with_capacity(3 * to.0 as usize * to.1 as usize);
     for y in 0..to.1 {
-        let row = (u64::from(y) * u64::from(from.1) / u64::from(to.1)) as usize * from.0 as usize;
+        let row = (y / scale) as usize * width as usize;
         for x in 0..to.0 {
-            let at = 3 * (row + (u64::from(x) * u64::from(from.0) / u64::from(to.0)) as usize);
+            let at = 3 * (row + (x / scale) as usize);
             out.extend_from_slice(&rgb[at..at + 3]);
         }
     }
@@ -469,7 +529,7 @@ mod tests {
     #[test]
     fn an_enlarged_image_repeats_each_pixel() {
         let rgb = [1, 1, 1, 2, 2, 2, 3, 3, 3, 4, 4, 4];
-        let big = enlarge(&rgb, (2, 2), (4, 3));
+        let big = enlarge(&rgb, 2, 2, (4, 3));
         let firsts: Vec<u8> = big.chunks(3).map(|p| p[0]).collect();
         assert_eq!(firsts, [1, 1, 2, 2, 1, 1, 2, 2, 3, 3, 4, 4]);
     }

@@ -1,8 +1,8 @@
 //! The window's surface: a device that can present to it, and an 8-bit image copied onto it
-//! byte for byte (no shader, no filtering: the window shows exactly the bytes a file would
-//! hold).
+//! byte for byte, from the host or on the device (no filtering, no conversion to floats:
+//! the window shows exactly the bytes a file would hold).
 
-use raycaster::gpu::{GpuOptions, GpuRenderer};
+use raycaster::gpu::{GpuOptions, GpuRenderer, Presenter};
 use std::sync::Arc;
 use winit::window::Window;
 
@@ -10,6 +10,8 @@ use winit::window::Window;
 pub struct Screen {
     surface: wgpu::Surface<'static>,
     gpu: GpuRenderer,
+    /// Draws a render's tiles onto the surface on the device.
+    presenter: Presenter,
     config: wgpu::SurfaceConfiguration,
     /// Where a pixel's red, green and blue bytes go among its four.
     order: [usize; 3],
@@ -61,12 +63,18 @@ impl Screen {
             color_space: wgpu::SurfaceColorSpace::Auto,
         };
         surface.configure(gpu.device(), &config);
-        Ok(Screen { surface, gpu, config, order })
+        let presenter = Presenter::new(&gpu);
+        Ok(Screen { surface, gpu, presenter, config, order })
     }
 
     /// The renderer on the presenting device.
     pub fn gpu(&self) -> &GpuRenderer {
         &self.gpu
+    }
+
+    /// The pass that draws a render onto the surface on the device.
+    pub fn presenter(&self) -> &Presenter {
+        &self.presenter
     }
 
     /// The surface's size in pixels.
@@ -81,35 +89,41 @@ impl Screen {
         self.surface.configure(self.gpu.device(), &self.config);
     }
 
-    /// Shows `rgb`, an image of the surface's size, row by row from the top. Returns
-    /// whether it was shown (a window being resized or hidden skips a frame).
-    pub fn show(&mut self, rgb: &[u8]) -> bool {
-        let gpu = &self.gpu;
+    /// The surface's next texture to draw on, or `None` while the window is being resized
+    /// or is hidden (the frame is skipped).
+    pub fn next_texture(&mut self) -> Option<wgpu::SurfaceTexture> {
+        match self.surface.get_current_texture() {
+            wgpu::CurrentSurfaceTexture::Success(frame) | wgpu::CurrentSurfaceTexture::Suboptimal(frame) => Some(frame),
+            wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
+                self.surface.configure(self.gpu.device(), &self.config);
+                None
+            }
+            _ => None,
+        }
+    }
+
+    /// Copies `rgb`, an image of the surface's size, row by row from the top, onto `frame`.
+    pub fn write(&self, frame: &wgpu::SurfaceTexture, rgb: &[u8]) {
         let (width, height) = self.size();
         assert_eq!(rgb.len(), 3 * width as usize * height as usize, "an image of the surface's size");
-        let frame = match self.surface.get_current_texture() {
-            wgpu::CurrentSurfaceTexture::Success(frame) | wgpu::CurrentSurfaceTexture::Suboptimal(frame) => frame,
-            wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
-                self.surface.configure(gpu.device(), &self.config);
-                return false;
-            }
-            _ => return false,
-        };
         let mut texels = vec![255u8; 4 * width as usize * height as usize];
         for (texel, pixel) in texels.chunks_exact_mut(4).zip(rgb.chunks_exact(3)) {
             for (channel, &at) in self.order.iter().enumerate() {
                 texel[at] = pixel[channel];
             }
         }
-        gpu.queue().write_texture(
+        self.gpu.queue().write_texture(
             frame.texture.as_image_copy(),
             &texels,
             wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(4 * width), rows_per_image: Some(height) },
             wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
         );
-        // The copy is queued: submit it, or the frame is presented cleared.
-        gpu.queue().submit([]);
-        gpu.queue().present(frame);
-        true
+    }
+
+    /// Shows `frame`, drawn by [`Screen::write`] or on the device.
+    pub fn present(&self, frame: wgpu::SurfaceTexture) {
+        // A copy is queued by write: submit it, or the frame is presented cleared.
+        self.gpu.queue().submit([]);
+        self.gpu.queue().present(frame);
     }
 }
