@@ -204,6 +204,10 @@ impl LiveView {
             }
         });
         let mut view = LiveView { display: xvfb.display.clone(), process, lines, id: String::new() };
+        // -v's line once the window is open: a driver that cannot present to X (SwiftShader
+        // as Chromium ships it) ends the command instead, which fails here rather than
+        // leaving xdotool waiting for a window that never comes.
+        view.wait_for("; keys:");
         let search = view.xdotool(&["search", "--sync", "--name", "^raycaster: scene.txt$"]);
         view.id = search.lines().next().expect("the window's id").to_string();
         // No window manager gives it the keyboard: keys go to the focused window.
