@@ -185,6 +185,10 @@ def test_ctrl_c_stops_a_render_between_tiles(corpus):
     """SIGINT while the reference renders a large image: KeyboardInterrupt, well before the
     image's last tile (the render would take many seconds)."""
     scene = raycaster.Scene.from_file(corpus / "a4" / "scene4_05_transparent_bar.txt")
+    # Python's own Ctrl-C handler, whatever this process inherited: a process started in the
+    # background by a shell without job control starts with SIGINT ignored, and Python then
+    # installs no handler.
+    inherited = signal.signal(signal.SIGINT, signal.default_int_handler)
     timer = threading.Timer(0.5, lambda: os.kill(os.getpid(), signal.SIGINT))
     timer.start()
     try:
@@ -193,6 +197,7 @@ def test_ctrl_c_stops_a_render_between_tiles(corpus):
                              shade_back=True)
     finally:
         timer.cancel()
+        signal.signal(signal.SIGINT, inherited)
 
 
 # A field of tiny spheres, every coordinate scaled by 1e30: out of the f32 kernel's range, and
