@@ -272,6 +272,12 @@ impl RenderOptions {
     pub fn pixel_count(&self) -> usize {
         self.width as usize * self.height as usize
     }
+
+    /// The samples the image traces: a pixel's centre each, or with sampling (docs/SPEC.md
+    /// §8) each pixel's samples.
+    pub fn sample_count(&self) -> u64 {
+        self.pixel_count() as u64 * self.sampling.map_or(1, |s| s.count()) as u64
+    }
 }
 
 /// The float result of a render. Pixels are stored row by row from the **top** row of the

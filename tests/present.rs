@@ -12,20 +12,6 @@ use raycaster::render::{Output, Outputs, RenderOptions};
 use raycaster::sampling::{Filter, Sampler, Sampling};
 use raycaster::scene::{load_scene, Scene};
 
-/// A texture the pass can draw on and the test can read.
-fn target(gpu: &GpuRenderer, (width, height): (u32, u32), format: wgpu::TextureFormat) -> wgpu::Texture {
-    gpu.device().create_texture(&wgpu::TextureDescriptor {
-        label: Some("target"),
-        size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format,
-        usage: wgpu::TextureUsages::COPY_DST | wgpu::TextureUsages::COPY_SRC,
-        view_formats: &[],
-    })
-}
-
 /// `texture`'s bytes, row by row from the top, without the copy's row padding.
 fn read_texture(gpu: &GpuRenderer, texture: &wgpu::Texture) -> Vec<u8> {
     let (width, height) = (texture.width(), texture.height());
@@ -102,7 +88,7 @@ fn compare_render(
 ) {
     for format in [wgpu::TextureFormat::Rgba8Unorm, wgpu::TextureFormat::Bgra8Unorm] {
         let scene = load_scene(&common::scenes_dir().join(scene)).expect("the scene loads");
-        let texture = target(gpu, target_size, format);
+        let texture = common::texture(gpu, target_size, format);
         let prepared = gpu.prepare(&scene, options, true).expect("the GPU prepares the scene");
         let presented = prepared.present(&Presenter::new(gpu), &texture, scale).expect("the frame is drawn");
         assert_eq!(presented, Presented::Drawn, "{}: no pixel is handed over", scene.path.display());
@@ -162,9 +148,9 @@ fn a_target_larger_than_a_bindable_buffer_is_left_to_the_host() {
     let scene = load_scene(&common::scenes_dir().join("three_lights.txt")).expect("the scene loads");
     let options = RenderOptions { outputs: Outputs::from(Output::Color), ..RenderOptions::all(64, 48) };
     let prepared = gpu.prepare(&scene, &options, true).expect("the GPU prepares the scene");
-    let texture = target(&gpu, (1024, 768), wgpu::TextureFormat::Rgba8Unorm);
+    let texture = common::texture(&gpu, (1024, 768), wgpu::TextureFormat::Rgba8Unorm);
     assert_eq!(prepared.present(&Presenter::new(&gpu), &texture, 16).unwrap(), Presented::TooLarge);
     // Within the limit the same device draws.
-    let texture = target(&gpu, (256, 192), wgpu::TextureFormat::Rgba8Unorm);
+    let texture = common::texture(&gpu, (256, 192), wgpu::TextureFormat::Rgba8Unorm);
     assert_eq!(prepared.present(&Presenter::new(&gpu), &texture, 4).unwrap(), Presented::Drawn);
 }

@@ -297,16 +297,7 @@ fn a_frame_with_pixels_handed_over_is_not_drawn_on_the_device() {
         outputs: raycaster::render::Outputs::from(raycaster::render::Output::Color),
         ..RenderOptions::all(96, 160)
     };
-    let texture = gpu.device().create_texture(&wgpu::TextureDescriptor {
-        label: None,
-        size: wgpu::Extent3d { width: 96, height: 160, depth_or_array_layers: 1 },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: wgpu::TextureFormat::Rgba8Unorm,
-        usage: wgpu::TextureUsages::COPY_DST,
-        view_formats: &[],
-    });
+    let texture = common::texture(gpu, (96, 160), wgpu::TextureFormat::Rgba8Unorm);
     let presenter = raycaster::gpu::Presenter::new(gpu);
     let prepared = gpu.prepare(&scene, &options, true).expect("the GPU prepares the scene");
     assert_eq!(prepared.present(&presenter, &texture, 1).unwrap(), raycaster::gpu::Presented::HandedOver);

@@ -200,9 +200,7 @@ pub fn run_case(gpu: &GpuRenderer, case: &Case, runs: usize) -> Result<Row, GpuE
     let start = Instant::now();
     let reference = reference_renderer.pixels(&positions);
     let reference_ms = case.secondary_rays().then(|| start.elapsed().as_secs_f64() * 1e3);
-    let samples = case.sampling.map_or(1, |s| s.count()) as u64;
-    let rays =
-        if case.secondary_rays() { reference_renderer.rays_traced() } else { options.pixel_count() as u64 * samples };
+    let rays = if case.secondary_rays() { reference_renderer.rays_traced() } else { options.sample_count() };
     let ours = samples_frame(&options, &gpu_samples);
     Ok(Row {
         name: case.name.clone(),

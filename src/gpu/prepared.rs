@@ -146,8 +146,7 @@ fn kernel_config(
 ) -> KernelConfig {
     let (loop_limit, shared_loads) = (gpu.loop_limit().is_some(), gpu.shares_bin_loads());
     let config = KernelConfig::new(buffers, acceleration, layout, options, traced, loop_limit, shared_loads);
-    let samples = options.pixel_count() as u64 * options.sampling.map_or(1, |s| s.count()) as u64;
-    if gpu.options.share_small_kernels && samples <= super::kernel::SHARED_KERNEL_MAX_SAMPLES {
+    if gpu.options.share_small_kernels && options.sample_count() <= super::kernel::SHARED_KERNEL_MAX_SAMPLES {
         config.shared(gpu.binds_every_buffer())
     } else {
         config

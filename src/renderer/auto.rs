@@ -19,8 +19,7 @@ pub const REFERENCE_QUICKER_BELOW: u64 = 2_000_000;
 pub fn reference_is_quicker(scene: &Scene, options: &RenderOptions) -> bool {
     let primitives = scene.primitive_counts().total() as u64;
     let per_ray = options.grid.map_or(primitives, |g| primitives.min(g.nx as u64 + g.ny as u64 + g.nz as u64));
-    let samples = options.sampling.map_or(1, |s| s.count()) as u64;
-    options.pixel_count() as u64 * samples * per_ray <= REFERENCE_QUICKER_BELOW
+    options.sample_count() * per_ray <= REFERENCE_QUICKER_BELOW
 }
 
 /// Primitives (each triangle of a mesh counted) up to which `auto` traces a scene that needs

@@ -47,6 +47,20 @@ pub fn splitmix64(state: &mut u64) -> u64 {
 }
 
 /// The project's own scenes.
+/// A texture of `size` a pass can copy onto and a test can copy from.
+pub fn texture(gpu: &GpuRenderer, (width, height): (u32, u32), format: wgpu::TextureFormat) -> wgpu::Texture {
+    gpu.device().create_texture(&wgpu::TextureDescriptor {
+        label: Some("target"),
+        size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage: wgpu::TextureUsages::COPY_DST | wgpu::TextureUsages::COPY_SRC,
+        view_formats: &[],
+    })
+}
+
 pub fn scenes_dir() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes")
 }
