@@ -1,8 +1,9 @@
 #!/usr/bin/env python3
 """The compare-builds check: two raycaster binaries render the same jobs, and every file
 they write must be identical: byte for byte, except PNG files, which must decode to the same
-pixels (8-bit RGB, the only PNG the program writes). Their compressed bytes depend on how the
-image data is deflated (in strips on several threads, at a level chosen by measurement), which
+pixels (8-bit RGB, the only PNG the program writes), and ZIP-compressed EXR files, which must
+hold the same headers and the same floats bit for bit. Their compressed bytes depend on how
+the image data is deflated (by which library, at a level chosen by measurement), which
 changes nothing a reader sees.
 
     scripts/compare_builds.py BIN_A BIN_B [--course DIR] [--size N] [--work DIR]
@@ -128,15 +129,63 @@ def png_pixels(data):
     return (width, height, b"".join(rows))
 
 
+def exr_blocks(data):
+    """The header and the raw little-endian bytes of each block, by y, of a single-part
+    scan-line OpenEXR file whose blocks are ZIP or ZIPS compressed (or stored), or None if
+    `data` is no such file. OpenEXR's `Zip::uncompress`: inflate, add each byte to the one
+    before less 128, then interleave the two halves. A block whose size is the raw size's
+    is stored as it is, which is why the raw sizes are worked out from the header."""
+    if data[:4] != b"\x76\x2f\x31\x01" or data[4] != 2 or data[5:8] != b"\0\0\0":
+        return None
+    pos, attributes = 8, {}
+    while data[pos] != 0:
+        name_end = data.index(b"\0", pos)
+        kind_end = data.index(b"\0", name_end + 1)
+        (size,) = struct.unpack("<i", data[kind_end + 1:kind_end + 5])
+        attributes[data[pos:name_end]] = data[kind_end + 5:kind_end + 5 + size]
+        pos = kind_end + 5 + size
+    header_end = pos + 1
+    compression = attributes[b"compression"][0]
+    if compression not in (0, 2, 3):
+        return None
+    x0, y0, x1, y1 = struct.unpack("<4i", attributes[b"dataWindow"])
+    pixel_bytes, channels = 0, attributes[b"channels"]
+    while channels[0] != 0:
+        name_end = channels.index(b"\0")
+        (kind,) = struct.unpack("<i", channels[name_end + 1:name_end + 5])
+        pixel_bytes += 2 if kind == 1 else 4
+        channels = channels[name_end + 17:]
+    lines = {0: 1, 2: 1, 3: 16}[compression]
+    blocks = (y1 - y0 + lines) // lines
+    offsets = struct.unpack(f"<{blocks}Q", data[header_end:header_end + 8 * blocks])
+    raw = {}
+    for offset in offsets:
+        y, size = struct.unpack("<iI", data[offset:offset + 8])
+        block = data[offset + 8:offset + 8 + size]
+        expected = (x1 - x0 + 1) * pixel_bytes * (min(y + lines, y1 + 1) - y)
+        if size < expected:
+            predicted = bytearray(zlib.decompress(block))
+            for k in range(1, len(predicted)):
+                predicted[k] = (predicted[k - 1] + predicted[k] - 128) & 255
+            half = (len(predicted) + 1) // 2
+            block = bytearray(len(predicted))
+            block[0::2], block[1::2] = predicted[:half], predicted[half:]
+        raw[y] = bytes(block)
+    return data[:header_end], raw
+
+
 def same_file(path_a, path_b):
-    """Byte for byte, or for PNG files the same decoded pixels."""
+    """Byte for byte; PNG files the same decoded pixels; EXR files the same header and
+    blocks once inflated."""
     data_a, data_b = path_a.read_bytes(), path_b.read_bytes()
     if data_a == data_b:
         return True
-    if path_a.suffix.lower() != ".png":
+    suffix = path_a.suffix.lower()
+    decode = png_pixels if suffix == ".png" else exr_blocks if suffix == ".exr" else None
+    if decode is None:
         return False
-    pixels_a = png_pixels(data_a)
-    return pixels_a is not None and pixels_a == png_pixels(data_b)
+    decoded_a = decode(data_a)
+    return decoded_a is not None and decoded_a == decode(data_b)
 
 
 def written_files(root, course):
@@ -184,7 +233,7 @@ def main():
     failed = sum(1 for code in codes_a.values() if code != 0)
     print(f"{len(codes_a)} jobs ({failed} refused alike or failed alike)" if not codes_differ
           else f"{len(codes_differ)} of {len(codes_a)} jobs exit differently")
-    print(f"{identical} of {total} files identical (PNG files: the same decoded pixels)")
+    print(f"{identical} of {total} files identical (PNG files: the same decoded pixels; EXR: the same floats)")
     sys.exit(0 if identical == total and not codes_differ and total > 0 else 1)
 
 

@@ -1,5 +1,6 @@
 //! OpenEXR files of 32-bit floats, written block by block as rows arrive.
 
+use super::in_order::InOrder;
 use super::{temp_beside, FinishedImage, ImageError, LiveTemp};
 use std::io::BufWriter;
 use std::path::{Path, PathBuf};
@@ -69,11 +70,12 @@ impl ExrCompression {
 }
 
 /// An OpenEXR file of 32-bit floats written row by row, top row first, into a temporary file
-/// like [`ImageFile`]. The `exr` crate writes blocks only from inside a closure, so the
-/// encoder runs on its own thread, fed through a channel of at most two row batches. It
-/// hands each block to the `exr` crate's pool of compressing threads, which writes them in
-/// order, so the file's bytes are those of one thread. Memory stays bounded by what one call
-/// passes in plus a block per compressing thread.
+/// like [`super::ImageFile`]. The `exr` crate writes blocks only from inside a closure, so the
+/// encoder runs on its own thread, fed through a channel of at most two row batches. ZIP and
+/// ZIPS blocks are deflated here, by zlib-rs on the writers' threads ([`zip_chunk`]); the
+/// other methods' by the `exr` crate's pool. Either way blocks are written in order, so the
+/// file's bytes are those of one thread. Memory stays bounded by what one call passes in
+/// plus a few blocks per compressing thread.
 pub struct ExrFile {
     path: PathBuf,
     temp: LiveTemp,
@@ -117,18 +119,26 @@ impl ExrFile {
                 let out = BufWriter::new(file);
                 exr::block::write(out, std::iter::once(header).collect(), true, |meta, chunks| {
                     use exr::block::writer::ChunksWriter;
-                    let blocks = chunks.total_chunks_count();
+                    let header = &meta.headers[0];
+                    if matches!(compression, ExrCompression::Zip | ExrCompression::Zips) {
+                        let mut blocks = InOrder::new();
+                        let top = header.own_attributes.layer_position.y();
+                        let mut write = |(index, chunk)| chunks.write_chunk(index, chunk);
+                        encode_exr_blocks(header, size, channels, receiver, |index, block| {
+                            blocks.start(move || (index, zip_chunk(block, top)), &mut write)
+                        })?;
+                        return blocks.finish(&mut write);
+                    }
                     // None where nothing is compressed, one block, or no threads (wasm).
+                    let blocks = chunks.total_chunks_count();
                     let parallel = if blocks > 1 { chunks.parallel_blocks_compressor(&meta) } else { None };
                     match parallel {
-                        Some(mut compressor) => {
-                            encode_exr_blocks(&meta.headers[0], size, channels, receiver, |index, block| {
-                                compressor.add_block_to_compression_queue(index, block)
-                            })
-                        }
+                        Some(mut compressor) => encode_exr_blocks(header, size, channels, receiver, |index, block| {
+                            compressor.add_block_to_compression_queue(index, block)
+                        }),
                         None => {
                             let mut compressor = chunks.sequential_blocks_compressor(&meta);
-                            encode_exr_blocks(&meta.headers[0], size, channels, receiver, |index, block| {
+                            encode_exr_blocks(header, size, channels, receiver, |index, block| {
                                 compressor.compress_block(index, block)
                             })
                         }
@@ -189,7 +199,8 @@ impl ExrFile {
 }
 
 /// Receives rows of interleaved pixels and hands each complete block, channels planar per
-/// row as EXR stores them, to `compress` with its index.
+/// row as EXR stores them (little-endian, which the `exr` crate also takes on the only
+/// machines we build for), to `compress` with its index.
 fn encode_exr_blocks(
     header: &exr::meta::header::Header,
     (width, height): (usize, usize),
@@ -214,7 +225,7 @@ fn encode_exr_blocks(
                 // Alphabetical channel order: B, G, R is the interleaved pixel read backwards.
                 for c in (0..n).rev() {
                     for pixel in row.chunks_exact(n) {
-                        data.extend_from_slice(&pixel[c].to_ne_bytes());
+                        data.extend_from_slice(&pixel[c].to_le_bytes());
                     }
                 }
             }
@@ -230,4 +241,40 @@ fn encode_exr_blocks(
         }
     }
     Ok(())
+}
+
+/// zlib's compression level for EXR's ZIP blocks: the `exr` crate's own for them (its
+/// `zip::compress_bytes`), so files keep their size (docs/performance.md, "The file writers").
+const ZIP_LEVEL: u32 = 4;
+
+/// The scan-line block `block` compressed as OpenEXR's ZIP and ZIPS do (OpenEXR's
+/// `ImfZip.cpp`, `Zip::compress`): the little-endian bytes reordered, even-indexed bytes then
+/// odd ones, each byte then replaced by its difference from the one before plus 128 (the
+/// first kept), and the whole deflated as one zlib stream. A block that does not shrink is
+/// stored as it is, which readers know by its size (OpenEXR's `ScanLineOutputFile`).
+/// `top` is the data window's first row, which a block's own y counts from.
+fn zip_chunk(block: exr::block::UncompressedBlock, top: i32) -> exr::block::chunk::Chunk {
+    use exr::block::chunk::{Chunk, CompressedBlock, CompressedScanLineBlock};
+    let raw = block.data;
+    // 32-bit floats: an even number of bytes, so the halves are equal.
+    let mut predicted = vec![0; raw.len()];
+    let (evens, odds) = predicted.split_at_mut(raw.len() / 2);
+    for (pair, (even, odd)) in raw.chunks_exact(2).zip(evens.iter_mut().zip(odds.iter_mut())) {
+        (*even, *odd) = (pair[0], pair[1]);
+    }
+    let mut differences = predicted.clone();
+    for (difference, pair) in differences[1..].iter_mut().zip(predicted.windows(2)) {
+        *difference = pair[1].wrapping_sub(pair[0]).wrapping_add(128);
+    }
+    let mut deflated = Vec::with_capacity(raw.len());
+    let mut compress = flate2::Compress::new(flate2::Compression::new(ZIP_LEVEL), true);
+    let finished = compress.compress_vec(&differences, &mut deflated, flate2::FlushCompress::Finish);
+    let shrank = matches!(finished, Ok(flate2::Status::StreamEnd)) && deflated.len() < raw.len();
+    Chunk {
+        layer_index: 0,
+        compressed_block: CompressedBlock::ScanLine(CompressedScanLineBlock {
+            y_coordinate: top + block.index.pixel_position.y() as i32,
+            compressed_pixels_le: if shrank { deflated } else { raw },
+        }),
+    }
 }

@@ -9,11 +9,13 @@
 
 use crate::render::Frame;
 use image::RgbImage;
+use in_order::InOrder;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 use std::sync::{Mutex, MutexGuard, PoisonError};
 
 mod exr_file;
+mod in_order;
 pub use exr_file::{ExrChannels, ExrCompression, ExrFile};
 
 /// docs/SPEC.md §5: `floor(255·clamp(v, 0, 1))`. NaN becomes 0.
@@ -371,15 +373,14 @@ fn png_start(file: std::fs::File, width: u32, height: u32) -> Result<PngWriter, 
     let out = encoder.write_header()?;
     let row_bytes = width as usize * 3;
     Ok(PngWriter {
-        out,
+        stream: PngStream { out, adler: 1 },
         row_bytes,
         strip_rows: (PNG_STRIP_BYTES / row_bytes).max(1),
         strip: Vec::new(),
         above: Vec::new(),
         rows_left: height as usize,
         strips_started: 0,
-        pending: std::collections::VecDeque::new(),
-        adler: 1,
+        strips: InOrder::new(),
     })
 }
 
@@ -397,7 +398,7 @@ const PNG_LEVEL: u32 = 4;
 /// Adler-32 is combined from the strips' (RFC 1950 §2.2). Every row is filtered with Up (PNG
 /// §9.2, type 2), which needs only the row above: a strip carries its first row's.
 struct PngWriter {
-    out: png::Writer<BufWriter<std::fs::File>>,
+    stream: PngStream,
     row_bytes: usize,
     strip_rows: usize,
     /// Rows gathered for the next strip.
@@ -407,8 +408,13 @@ struct PngWriter {
     /// Rows of the image not yet gathered.
     rows_left: usize,
     strips_started: usize,
-    /// The strips being deflated, oldest first.
-    pending: std::collections::VecDeque<std::sync::mpsc::Receiver<Strip>>,
+    /// The strips being deflated.
+    strips: InOrder<Strip>,
+}
+
+/// The PNG's image data as written so far.
+struct PngStream {
+    out: png::Writer<BufWriter<std::fs::File>>,
     /// Adler-32 of the filtered bytes written so far.
     adler: u32,
 }
@@ -445,26 +451,16 @@ impl PngWriter {
         let (first, last, row_bytes) = (self.strips_started == 0, self.rows_left == 0, self.row_bytes);
         self.strips_started += 1;
         let job = move || deflate_png_strip(&above, &rows, row_bytes, first, last);
-        match writer_pool() {
-            Some(pool) => {
-                let (send, receive) = std::sync::mpsc::sync_channel(1);
-                pool.spawn(move || drop(send.send(job())));
-                self.pending.push_back(receive);
-                while self.pending.len() > pool.current_num_threads() + 2 {
-                    self.write_oldest()?;
-                }
-                Ok(())
-            }
-            None => self.write_strip(job()),
-        }
+        self.strips.start(job, |strip| self.stream.write_strip(strip))
     }
 
-    fn write_oldest(&mut self) -> std::io::Result<()> {
-        let pending = self.pending.pop_front().expect("a strip is pending");
-        let strip = pending.recv().map_err(|_| std::io::Error::other("a PNG strip's deflate stopped"))?;
-        self.write_strip(strip)
+    fn finish(mut self) -> std::io::Result<()> {
+        self.strips.finish(|strip| self.stream.write_strip(strip))?;
+        self.stream.out.finish().map_err(std::io::Error::other)
     }
+}
 
+impl PngStream {
     fn write_strip(&mut self, strip: Strip) -> std::io::Result<()> {
         let mut deflated = strip.deflated?;
         self.adler = zlib_rs::adler32::adler32_combine(self.adler, strip.adler, strip.len);
@@ -473,13 +469,6 @@ impl PngWriter {
             deflated.extend_from_slice(&self.adler.to_be_bytes());
         }
         self.out.write_chunk(png::chunk::IDAT, &deflated).map_err(std::io::Error::other)
-    }
-
-    fn finish(mut self) -> std::io::Result<()> {
-        while !self.pending.is_empty() {
-            self.write_oldest()?;
-        }
-        self.out.finish().map_err(std::io::Error::other)
     }
 }
 
@@ -536,15 +525,6 @@ const ZLIB_HEADER: [u8; 2] = {
     let flg = flevel << 6;
     [0x78, (flg + (31 - (0x78 * 256 + flg) % 31) % 31) as u8]
 };
-
-/// The threads that compress PNG strips, one per core, made on first use; none where threads
-/// cannot be made (wasm), and strips are then deflated by the caller. Their own pool, not
-/// rayon's global one, whose threads may be the very caller waiting for a strip.
-fn writer_pool() -> Option<&'static rayon::ThreadPool> {
-    static POOL: std::sync::OnceLock<Option<rayon::ThreadPool>> = std::sync::OnceLock::new();
-    POOL.get_or_init(|| rayon::ThreadPoolBuilder::new().thread_name(|k| format!("png-deflate-{k}")).build().ok())
-        .as_ref()
-}
 
 /// Temporary files are private (0600); an image is an ordinary file (0644).
 #[cfg(unix)]
