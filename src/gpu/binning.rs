@@ -18,6 +18,7 @@ use super::layout::{BinItem, EyeTriangle, GpuTriangle, PrimitiveKind};
 use crate::bvh::Aabb;
 use crate::camera::PrimaryRays;
 use glam::{DVec3, Vec3};
+use rayon::prelude::*;
 
 /// Pixel columns of a bin: the kernel's workgroup is as wide, so that the lanes of a subgroup
 /// on lavapipe (8 neighbouring invocations of a workgroup row) walk one list.
@@ -117,16 +118,18 @@ impl Bins {
         let projector = Projector::new(rays, reach + rounding);
         let columns = rays.width.div_ceil(BIN_COLUMNS);
         let rows = rays.height.div_ceil(BIN_ROWS);
-        let mut placed: Vec<Placed> = Vec::with_capacity(candidates.len());
-        for c in candidates {
-            let rect = match &c.points {
-                Some(points) => projector.pixel_rect(points),
-                None => projector.pixel_rect(&box_corners(&c.bounds)),
-            };
-            let Some(rect) = rect else { continue };
-            let item = BinItem { reference: c.reference, near: projector.near_bound(&c.bounds), pixels: 0 };
-            placed.push(Placed { item, pixels: rect });
-        }
+        // Projected on every core, kept in the candidates' order.
+        let placed: Vec<Placed> = candidates
+            .par_iter()
+            .filter_map(|c| {
+                let rect = match &c.points {
+                    Some(points) => projector.pixel_rect(points),
+                    None => projector.pixel_rect(&box_corners(&c.bounds)),
+                }?;
+                let item = BinItem { reference: c.reference, near: projector.near_bound(&c.bounds), pixels: 0 };
+                Some(Placed { item, pixels: rect })
+            })
+            .collect();
         let (lengths, row_items) = list_lengths(&placed, columns, rows);
         if !worth_it(&lengths) {
             return None;
@@ -150,7 +153,8 @@ impl Bins {
         let start = crate::clock::Instant::now();
         // Stable, so that equally near primitives keep their order in every band's lists.
         self.placed = sorted_by_near(std::mem::take(&mut self.placed));
-        self.eye_triangles = triangles.iter().map(|t| EyeTriangle::new(t, self.orthographic, self.direction)).collect();
+        let (orthographic, direction) = (self.orthographic, self.direction);
+        self.eye_triangles = triangles.par_iter().map(|t| EyeTriangle::new(t, orthographic, direction)).collect();
         self.finished = true;
         self.build_ms += start.elapsed().as_secs_f64() * 1e3;
     }
@@ -327,14 +331,14 @@ pub struct ListLengths {
 /// The finite primitives of a flattened scene, for [`Bins::build`].
 pub fn candidates(triangles: &[GpuTriangle], sphere_bounds: &[Aabb], ellipsoid_bounds: &[Aabb]) -> Vec<Candidate> {
     let mut out = Vec::with_capacity(triangles.len() + sphere_bounds.len() + ellipsoid_bounds.len());
-    for (k, t) in triangles.iter().enumerate() {
+    out.par_extend(triangles.par_iter().enumerate().map(|(k, t)| {
         let points = [Vec3::from(t.v0), Vec3::from(t.v1), Vec3::from(t.v2)];
-        out.push(Candidate {
+        Candidate {
             reference: PrimitiveKind::Triangle.reference(k),
             bounds: Aabb::of_points(&points),
             points: Some(points),
-        });
-    }
+        }
+    }));
     for (k, b) in sphere_bounds.iter().enumerate() {
         out.push(Candidate { reference: PrimitiveKind::Sphere.reference(k), bounds: *b, points: None });
     }

@@ -7,6 +7,7 @@
 
 use super::bindings::Binding;
 use naga::{Module, Scalar, TypeInner};
+use rayon::prelude::*;
 use std::collections::HashMap;
 use std::sync::OnceLock;
 
@@ -60,7 +61,8 @@ fn float_offsets(module: &Module, ty: naga::Handle<naga::Type>, offset: usize, o
 /// which element and which byte of it, and the value.
 pub fn first_non_finite(binding: Binding, bytes: &[u8]) -> Option<(usize, usize, f32)> {
     let layout = layouts().get(&binding.index())?;
-    bytes.chunks_exact(layout.stride.max(4)).enumerate().find_map(|(k, element)| {
+    // Checked on every core; the first in the buffer's order is the one reported.
+    bytes.par_chunks_exact(layout.stride.max(4)).enumerate().find_map_first(|(k, element)| {
         layout.floats.iter().find_map(|&at| {
             let value = f32::from_le_bytes(element[at..at + 4].try_into().expect("four bytes"));
             (!value.is_finite()).then_some((k, at, value))

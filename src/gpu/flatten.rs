@@ -13,8 +13,9 @@ use crate::bvh::{Aabb, Bvh, BvhNode};
 use crate::camera::PrimaryRays;
 use crate::clock::Instant;
 use crate::grid::{Footprint, Grid, GridSize};
-use crate::scene::{ellipsoid_extent, for_each_leaf, Bounds, Object, Scene, Shape};
+use crate::scene::{ellipsoid_extent, for_each_leaf, Bounds, Mesh, Object, Scene, Shape};
 use glam::{DMat3, DMat4, DVec3, Vec3};
+use rayon::prelude::*;
 
 /// Everything the kernel reads, ready to upload.
 #[derive(Clone, Debug, Default)]
@@ -289,13 +290,11 @@ impl SceneBuffers {
             match leaf.shape() {
                 Shape::Sphere { center, radius, material } => self.push_sphere(matrix, *center, *radius, *material),
                 Shape::Plane { normal, offset, material } => self.push_plane(matrix, *normal, *offset, *material),
-                Shape::Triangle { vertices, material } => self.push_triangle(matrix, vertices, *material),
-                Shape::Mesh { mesh, material } => {
-                    self.triangles.reserve(mesh.triangles.len());
-                    for k in 0..mesh.triangles.len() {
-                        self.push_triangle(matrix, &mesh.triangle(k), *material);
-                    }
+                Shape::Triangle { vertices, material } => {
+                    let world = vertices.map(|v| matrix.transform_point3(v));
+                    self.triangles.push(gpu_triangle(world, mirrors(matrix), *material));
                 }
+                Shape::Mesh { mesh, material } => self.push_mesh(matrix, mesh, *material),
                 Shape::Group(_) | Shape::Transform { .. } => {}
             }
         });
@@ -337,26 +336,40 @@ impl SceneBuffers {
         });
     }
 
-    /// A mirroring transform (det < 0) reverses the winding of mapped vertices, while the
-    /// normal of docs/SPEC.md §4, `normalise(M⁻ᵀ·n)`, does not flip; swapping two vertices keeps them equal.
-    fn push_triangle(&mut self, matrix: &DMat4, vertices: &[DVec3; 3], material: u32) {
-        let [a, mut b, mut c] = vertices.map(|v| matrix.transform_point3(v));
-        if DMat3::from_mat4(*matrix).determinant() < 0.0 {
-            std::mem::swap(&mut b, &mut c);
-        }
-        // A triangle f64 cannot give a normal is never hit (cpu::intersect_triangle): it
-        // reaches the kernel as a point, whose edge functions and determinant are exactly 0
-        // on every driver (shaders/exact.wgsl), so it is tested (and counted) but never hit,
-        // and its normal is a unit vector, not the NaN of a zero vector normalised.
-        let Some(normal) = (b - a).cross(c - a).try_normalize() else {
-            let point = f32x3(a);
-            let [normal_u, normal_v] = super::layout::octahedral(DVec3::Z);
-            self.triangles.push(GpuTriangle { v0: point, material, v1: point, normal_u, v2: point, normal_v });
-            return;
-        };
-        let [normal_u, normal_v] = super::layout::octahedral(normal);
-        self.triangles.push(GpuTriangle { v0: f32x3(a), material, v1: f32x3(b), normal_u, v2: f32x3(c), normal_v });
+    /// Each position of the mesh carried to the world once, then its triangles flattened
+    /// on every core, in order.
+    fn push_mesh(&mut self, matrix: &DMat4, mesh: &Mesh, material: u32) {
+        let world: Vec<DVec3> = mesh.positions.par_iter().map(|&p| matrix.transform_point3(p)).collect();
+        let mirrored = mirrors(matrix);
+        self.triangles.par_extend(
+            mesh.triangles.par_iter().map(|t| gpu_triangle(t.map(|v| world[v as usize]), mirrored, material)),
+        );
     }
+}
+
+/// Whether `matrix` mirrors (det < 0), which reverses the winding of mapped vertices.
+fn mirrors(matrix: &DMat4) -> bool {
+    DMat3::from_mat4(*matrix).determinant() < 0.0
+}
+
+/// A triangle of world (camera-relative) vertices. A mirroring transform reverses the winding
+/// of mapped vertices, while the normal of docs/SPEC.md §4, `normalise(M⁻ᵀ·n)`, does not
+/// flip; swapping two vertices keeps them equal.
+fn gpu_triangle([a, mut b, mut c]: [DVec3; 3], mirrored: bool, material: u32) -> GpuTriangle {
+    if mirrored {
+        std::mem::swap(&mut b, &mut c);
+    }
+    // A triangle f64 cannot give a normal is never hit (cpu::intersect_triangle): it
+    // reaches the kernel as a point, whose edge functions and determinant are exactly 0
+    // on every driver (shaders/exact.wgsl), so it is tested (and counted) but never hit,
+    // and its normal is a unit vector, not the NaN of a zero vector normalised.
+    let Some(normal) = (b - a).cross(c - a).try_normalize() else {
+        let point = f32x3(a);
+        let [normal_u, normal_v] = super::layout::octahedral(DVec3::Z);
+        return GpuTriangle { v0: point, material, v1: point, normal_u, v2: point, normal_v };
+    };
+    let [normal_u, normal_v] = super::layout::octahedral(normal);
+    GpuTriangle { v0: f32x3(a), material, v1: f32x3(b), normal_u, v2: f32x3(c), normal_v }
 }
 
 /// The f32 box around `center ± half`, padded by a relative 1e-6 so that rounding to f32
