@@ -2,6 +2,7 @@
 //! one band's part files); `compare`'s renders; and batches of command lines.
 
 use crate::app::args::{Command, RenderArgs, Split};
+use crate::app::lookahead::Lookahead;
 use crate::app::output_file::{OutputFile, Pixels, Sink};
 use crate::app::part::{self, Identity, PartHeader};
 use crate::app::progress::Progress;
@@ -508,21 +509,19 @@ pub fn run_batch(
     let mut count = BatchCount::default();
     // The course's own commands.txt has -gui on every line: say it once.
     let mut preview_told = false;
+    // The kernels of the lines after the one rendering, compiled meanwhile on every core (the
+    // next lines' renders find them compiled, or wait for them: docs/SPEC.md §6).
+    let lookahead = Lookahead::new(lines.len(), compiling_threads());
     std::thread::scope(|scope| {
-        let (starting, started) = std::sync::mpsc::channel::<usize>();
-        let upcoming = &lines;
-        // The kernel of the line after the one starting, compiled while that one renders (the
-        // next line's render finds it compiled, or waits for it: docs/SPEC.md §6).
-        scope.spawn(move || {
-            while let Ok(mut k) = started.recv() {
-                k = started.try_iter().last().unwrap_or(k);
-                if let Some(&(_, line)) = upcoming.get(k + 1) {
-                    precompile_line(line, backend);
+        for _ in 0..compiling_threads() {
+            scope.spawn(|| {
+                while let Some(k) = lookahead.take() {
+                    precompile_line(lines[k].1, backend);
                 }
-            }
-        });
+            });
+        }
         for (k, &(line_number, line)) in lines.iter().enumerate() {
-            let _ = starting.send(k);
+            lookahead.starting(k);
             let words: Vec<&str> = line.split_whitespace().collect();
             count.run += 1;
             let failure = match cli::parse_args(&words).and_then(|c| validate::check(&c).map(|()| c)) {
@@ -560,9 +559,20 @@ pub fn run_batch(
             }
             bar.advance(1);
         }
+        lookahead.finish();
     });
     count
 }
+
+/// Threads that compile a batch's next kernels: one per core, at most
+/// [`MAX_COMPILING_THREADS`]; as many lines ahead of the one rendering.
+fn compiling_threads() -> usize {
+    std::thread::available_parallelism().map_or(1, |n| n.get()).min(MAX_COMPILING_THREADS)
+}
+
+/// Enough to compile a batch's few distinct kernels at once (assignment 4's lines need 6), few
+/// enough that scenes loaded ahead stay few.
+const MAX_COMPILING_THREADS: usize = 4;
 
 /// Compiles the GPU kernel a batch's `line` will need, where it is a render the GPU would
 /// run ([`Renderer::precompile`]); a line that does not parse or load is left for its turn

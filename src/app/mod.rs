@@ -14,7 +14,8 @@
 //! 4. [`flags`]: the table of flags, from which parsing, help and suggestions come;
 //! 5. leaves: [`args`] (the parsed command line), [`part`] (the part-file format),
 //!    [`progress`] (the progress bar), [`memory`] (the peak-memory probe), [`interrupt`]
-//!    (what can interrupt the command, and its exit status).
+//!    (what can interrupt the command, and its exit status), [`lookahead`] (which lines of
+//!    a batch compile their kernels ahead).
 
 pub mod args;
 pub mod bench;
@@ -26,6 +27,7 @@ pub mod gallery;
 pub mod grade;
 pub mod interrupt;
 pub mod job;
+pub mod lookahead;
 pub mod memory;
 pub mod output_file;
 pub mod part;
