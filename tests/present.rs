@@ -39,6 +39,24 @@ fn read_texture(gpu: &GpuRenderer, texture: &wgpu::Texture) -> Vec<u8> {
     view.chunks_exact(row as usize).flat_map(|r| r[..4 * width as usize].to_vec()).collect()
 }
 
+/// What a frame shows: colour, normals, or the depth over a `-depth MIN MAX` range.
+#[derive(Clone, Copy, Debug)]
+enum View {
+    Color,
+    Normals,
+    Depth(f32, f32),
+}
+
+impl View {
+    fn output(self) -> Output {
+        match self {
+            View::Color => Output::Color,
+            View::Normals => Output::Normals,
+            View::Depth(..) => Output::Depth,
+        }
+    }
+}
+
 /// What the window draws from the host: the float frame quantised as the files are, each
 /// pixel a `scale × scale` block cut at the target's edges, each texel opaque in `format`'s
 /// byte order.
@@ -46,16 +64,16 @@ fn drawn_from_host(
     gpu: &GpuRenderer,
     scene: &Scene,
     options: &RenderOptions,
-    output: Output,
+    view: View,
     scale: u32,
     (width, height): (u32, u32),
     format: wgpu::TextureFormat,
 ) -> Vec<u8> {
     let frame = gpu.render(scene, options).expect("the GPU renders the scene");
-    let image = match output {
-        Output::Color => image_io::color_image(&frame),
-        Output::Normals => image_io::normals_image(&frame),
-        Output::Depth => unreachable!("the depth's range is the host's"),
+    let image = match view {
+        View::Color => image_io::color_image(&frame),
+        View::Normals => image_io::normals_image(&frame),
+        View::Depth(min, max) => image_io::depth_image(&frame, min, max),
     };
     let mut texels = Vec::with_capacity(4 * (width * height) as usize);
     for y in 0..height {
@@ -71,29 +89,39 @@ fn drawn_from_host(
     texels
 }
 
-/// Draws `scene`'s `output` at `size` pixels onto a target of `target_size` texels on the
+/// Draws `scene`'s `view` at `size` pixels onto a target of `target_size` texels on the
 /// device and from the host, and compares them.
-fn compare(gpu: &GpuRenderer, scene: &str, output: Output, size: (u32, u32), scale: u32, target_size: (u32, u32)) {
-    let options = RenderOptions { outputs: Outputs::from(output), ..RenderOptions::all(size.0, size.1) };
-    compare_render(gpu, scene, &options, output, scale, target_size);
+fn compare(gpu: &GpuRenderer, scene: &str, view: View, size: (u32, u32), scale: u32, target_size: (u32, u32)) {
+    let options = RenderOptions { outputs: Outputs::from(view.output()), ..RenderOptions::all(size.0, size.1) };
+    compare_render(gpu, scene, &options, view, scale, target_size);
 }
 
 fn compare_render(
     gpu: &GpuRenderer,
     scene: &str,
     options: &RenderOptions,
-    output: Output,
+    view: View,
     scale: u32,
     target_size: (u32, u32),
 ) {
+    let output = view.output();
     for format in [wgpu::TextureFormat::Rgba8Unorm, wgpu::TextureFormat::Bgra8Unorm] {
         let scene = load_scene(&common::scenes_dir().join(scene)).expect("the scene loads");
         let texture = common::texture(gpu, target_size, format);
         let prepared = gpu.prepare(&scene, options, true).expect("the GPU prepares the scene");
-        let presented = prepared.present(&Presenter::new(gpu), &texture, scale).expect("the frame is drawn");
-        assert_eq!(presented, Presented::Drawn, "{}: no pixel is handed over", scene.path.display());
+        let presenter = Presenter::new(gpu);
+        let presented = match view {
+            View::Depth(min, max) => prepared.present_depth(&presenter, &texture, scale, (min, max)),
+            View::Color | View::Normals => prepared.present(&presenter, &texture, scale),
+        };
+        assert_eq!(
+            presented.expect("the frame is drawn"),
+            Presented::Drawn,
+            "{}: no pixel is handed over",
+            scene.path.display()
+        );
         let device = read_texture(gpu, &texture);
-        let host = drawn_from_host(gpu, &scene, options, output, scale, target_size, format);
+        let host = drawn_from_host(gpu, &scene, options, view, scale, target_size, format);
         let differing = device.chunks_exact(4).zip(host.chunks_exact(4)).filter(|(d, h)| d != h).count();
         assert_eq!(
             differing,
@@ -109,16 +137,39 @@ fn compare_render(
 #[test]
 fn a_frame_drawn_on_the_device_is_the_one_drawn_from_the_host() {
     let Some(gpu) = common::gpu() else { return };
-    compare(gpu, "plane_and_sphere_perspective.txt", Output::Color, (64, 48), 1, (64, 48));
-    compare(gpu, "three_lights.txt", Output::Normals, (64, 48), 1, (64, 48));
+    compare(gpu, "plane_and_sphere_perspective.txt", View::Color, (64, 48), 1, (64, 48));
+    compare(gpu, "three_lights.txt", View::Normals, (64, 48), 1, (64, 48));
     // Moving frames: a smaller image enlarged, its last blocks cut at the target's edges.
-    compare(gpu, "triangles.txt", Output::Color, (23, 17), 3, (67, 50));
-    compare(gpu, "mesh_octahedron.txt", Output::Normals, (30, 20), 4, (117, 80));
+    compare(gpu, "triangles.txt", View::Color, (23, 17), 3, (67, 50));
+    compare(gpu, "mesh_octahedron.txt", View::Normals, (30, 20), 4, (117, 80));
     // Assignment 7's supersampling: the filter's pass writes the pixels the pass enlarges.
     let sampling = Sampling { sampler: Sampler::Jittered(4), filter: Filter::Tent(1.0), seed: 5 };
     let options =
         RenderOptions { outputs: Outputs::from(Output::Color), sampling: Some(sampling), ..RenderOptions::all(40, 30) };
-    compare_render(gpu, "plane_and_sphere_perspective.txt", &options, Output::Color, 2, (80, 59));
+    compare_render(gpu, "plane_and_sphere_perspective.txt", &options, View::Color, 2, (80, 59));
+}
+
+/// The depth over a `-depth` range, drawn on the device, is the host's `image_io::depth_image`
+/// texel for texel: the range cuts the scene's hits (the nearest quarter white, the farthest
+/// quarter black, grey levels between), and misses are black.
+#[test]
+fn the_depth_drawn_on_the_device_is_the_one_drawn_from_the_host() {
+    let Some(gpu) = common::gpu() else { return };
+    for (scene, size, scale, target) in
+        [("plane_and_sphere_perspective.txt", (64, 48), 1, (64, 48)), ("mesh_octahedron.txt", (30, 20), 3, (89, 59))]
+    {
+        let loaded = load_scene(&common::scenes_dir().join(scene)).expect("the scene loads");
+        let options = RenderOptions { outputs: Outputs::from(Output::Depth), ..RenderOptions::all(size.0, size.1) };
+        let frame = gpu.render(&loaded, &options).expect("the GPU renders the scene");
+        let mut hits: Vec<f32> = frame.depth.iter().zip(&frame.hit).filter(|(_, &h)| h).map(|(&t, _)| t).collect();
+        hits.sort_by(f32::total_cmp);
+        assert!(hits.len() < frame.hit.len(), "{scene}: some pixel misses");
+        let range = (hits[hits.len() / 4], hits[3 * hits.len() / 4]);
+        let image = image_io::depth_image(&frame, range.0, range.1);
+        let levels: std::collections::BTreeSet<u8> = image.pixels().map(|p| p.0[0]).collect();
+        assert!(levels.len() > 10 && levels.contains(&0) && levels.contains(&255), "{scene}: levels {levels:?}");
+        compare(gpu, scene, View::Depth(range.0, range.1), size, scale, target);
+    }
 }
 
 #[test]
@@ -127,8 +178,8 @@ fn a_frame_of_many_tiles_through_copies_is_drawn_whole() {
     // A row of 100 packed pixels per tile, and the copies a discrete GPU makes: tiles take
     // turns in the slots while earlier ones are still being enlarged.
     let small = gpu.on_same_device(GpuOptions { max_tile_bytes: 400, mapped_buffers: false, ..GpuOptions::default() });
-    compare(&small, "plane_and_sphere_perspective.txt", Output::Color, (100, 60), 1, (100, 60));
-    compare(&small, "three_lights.txt", Output::Color, (100, 60), 2, (199, 119));
+    compare(&small, "plane_and_sphere_perspective.txt", View::Color, (100, 60), 1, (100, 60));
+    compare(&small, "three_lights.txt", View::Color, (100, 60), 2, (199, 119));
 }
 
 #[test]

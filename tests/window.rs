@@ -58,15 +58,19 @@ fn the_window_shows_the_render_and_the_mouse_turns_its_camera() {
     let dir = tempfile::tempdir().unwrap();
     std::fs::write(dir.path().join("scene.txt"), SCENE).unwrap();
     std::fs::write(dir.path().join("turned.txt"), scene_after_drag(DRAG)).unwrap();
-    let reference = |scene: &str, flag: &str, name: &str| {
+    let reference = |scene: &str, flag: &[&str], name: &str| {
         let size = [WIDTH.to_string(), HEIGHT.to_string()];
-        let args = ["-input", scene, "-size", &size[0], &size[1], flag, name, "--backend", "cpu"];
+        let args = [&["-input", scene, "-size", &size[0], &size[1]], flag, &[name, "--backend", "cpu"]].concat();
         check(command().args(args).current_dir(dir.path()).output().unwrap());
         read_image(&dir.path().join(name)).unwrap()
     };
-    let colour = reference("scene.txt", "-output", "colour.tga");
-    let normals = reference("scene.txt", "-normals", "normals.tga");
-    let turned = reference("turned.txt", "-output", "turned.tga");
+    let colour = reference("scene.txt", &["-output"], "colour.tga");
+    let normals = reference("scene.txt", &["-normals"], "normals.tga");
+    // The spheres' fronts lie between 9 and 10 from the camera.
+    let depth = reference("scene.txt", &["-depth", "9.2", "10"], "depth.tga");
+    let greys: std::collections::BTreeSet<u8> = depth.pixels().map(|p| p.0[0]).collect();
+    assert!(greys.len() > 20, "the range grades the spheres: {greys:?}");
+    let turned = reference("turned.txt", &["-output"], "turned.tga");
     assert!(
         image_diff(&colour, &turned).off_by_more_than_one > 1000,
         "the drag must change the view for this test to mean anything"
@@ -76,7 +80,21 @@ fn the_window_shows_the_render_and_the_mouse_turns_its_camera() {
     let mut window = LiveView::open(
         &display,
         dir.path(),
-        &["-input", "scene.txt", "-size", &size[0], &size[1], "-output", "written.tga", "-gui", "-v"],
+        &[
+            "-input",
+            "scene.txt",
+            "-size",
+            &size[0],
+            &size[1],
+            "-output",
+            "written.tga",
+            "-depth",
+            "9.2",
+            "10",
+            "written_depth.tga",
+            "-gui",
+            "-v",
+        ],
     );
     // Colour and normals are drawn on the device, the frame never crossing to the host.
     let first = window.wait_for(&format!("colour frame {WIDTH}x{HEIGHT}"));
@@ -87,10 +105,11 @@ fn the_window_shows_the_render_and_the_mouse_turns_its_camera() {
     let line = window.wait_for(&format!("normals frame {WIDTH}x{HEIGHT}"));
     assert!(line.ends_with("drawn on the device"), "{line}");
     within_contract("the normals", &window.screenshot(), &normals);
-    // The depth's range comes from the frame's hits, on the host.
+    // The depth over the command line's range too: its grey levels looked up on the device.
     window.xdotool(&["key", "d"]);
     let line = window.wait_for(&format!("depth frame {WIDTH}x{HEIGHT}"));
-    assert!(line.ends_with("drawn from the host"), "{line}");
+    assert!(line.ends_with("drawn on the device"), "{line}");
+    within_contract("the depth", &window.screenshot(), &depth);
 
     window.xdotool(&["key", "c"]);
     window.wait_for(&format!("colour frame {WIDTH}x{HEIGHT}"));

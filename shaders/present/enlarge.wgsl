@@ -1,10 +1,11 @@
 // uses: host (gpu::present's constants, prepended)
 // The live window's frame, on the device (src/gpu/present.rs): one tile of a render's
-// packed 8-bit words (gpu::layout::PixelLayout, packed) enlarged into the texels of the
+// packed words (gpu::layout::PixelLayout, packed) enlarged into the texels of the
 // surface's rows, each pixel a `scale` × `scale` block, then copied onto the surface as
 // bytes.
 // Integer work only: the texels are the bytes an image file holds, and no float-to-unorm
-// conversion (whose rounding a driver chooses) comes between. Not part of the kernel
+// conversion (whose rounding a driver chooses) comes between; a depth's grey level is
+// found by comparing its bits with bounds the host computed in f64. Not part of the kernel
 // (src/gpu/shader.rs composes that from shaders/*.wgsl alone).
 
 struct Enlarge {
@@ -24,6 +25,9 @@ struct Enlarge {
     row_texels: u32,
     // 1 where the target's bytes are blue, green, red, alpha; 0 for red, green, blue, alpha.
     bgra: u32,
+    // 1 where the first word is a depth's t (its bits; all ones where nothing was hit),
+    // shown in grey; 0 where it is a packed colour or |N|.
+    depth: u32,
 }
 
 @group(0) @binding(0) var<storage, read> pixels: array<u32>;
@@ -32,6 +36,32 @@ struct Enlarge {
 // CUT_SHORT_WORD or BEYOND_REACH_WORD): the host then draws this frame from the reference.
 @group(0) @binding(2) var<storage, read_write> handed_over: atomic<u32>;
 @group(0) @binding(3) var<uniform> E: Enlarge;
+// For a depth: depth_bounds[k] is the largest ordered key (below) whose grey level is at
+// least k (gpu::present::depth_bounds); [0] holds every key.
+@group(0) @binding(4) var<storage, read> depth_bounds: array<u32, 256>;
+
+// A float's bits as a key that orders floats as unsigned integers: the sign bit flipped for
+// positive numbers, every bit for negative ones (gpu::present::ordered_key).
+fn ordered_key(bits: u32) -> u32 {
+    return select(bits | 0x80000000u, ~bits, (bits >> 31u) == 1u);
+}
+
+// The grey level of the depth word `bits`, as image_io::depth_level gives it: the largest k
+// whose bound the key does not pass (a binary search over the non-increasing bounds);
+// black where nothing was hit.
+fn depth_rgb(bits: u32) -> u32 {
+    if (bits == 0xffffffffu) {
+        return 0u;
+    }
+    let key = ordered_key(bits);
+    var level = 0u;
+    for (var step = 128u; step > 0u; step >>= 1u) {
+        if (key <= depth_bounds[level + step]) {
+            level += step;
+        }
+    }
+    return level | (level << 8u) | (level << 16u);
+}
 
 // A packed colour or |N| (r | g << 8 | b << 16) as the texel's four bytes, opaque.
 fn texel_of(rgb: u32) -> u32 {
@@ -55,7 +85,12 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     if (first == CUT_SHORT_WORD || first == BEYOND_REACH_WORD) {
         atomicOr(&handed_over, 1u);
     }
-    let texel = texel_of(first);
+    var rgb = first;
+    // A condition every invocation shares: a CPU driver's lanes skip the search together.
+    if (E.depth != 0u) {
+        rgb = depth_rgb(first);
+    }
+    let texel = texel_of(rgb);
     let x0 = id.x * E.scale;
     let y0 = (E.first_row + id.y) * E.scale;
     let x1 = min(x0 + E.scale, E.target_width);

@@ -1,8 +1,12 @@
 //! A prepared scene drawn onto a texture on the device (the live window's surface): each
-//! tile's packed 8-bit words enlarged into texels by `shaders/present/enlarge.wgsl` and
-//! copied onto the texture, with nothing read back but one word saying whether the kernel
-//! handed a pixel over to the reference. On a discrete GPU the frame never crosses to the
-//! host.
+//! tile's packed words enlarged into texels by `shaders/present/enlarge.wgsl` and copied
+//! onto the texture, with nothing read back but one word saying whether the kernel handed a
+//! pixel over to the reference. On a discrete GPU the frame never crosses to the host.
+//!
+//! Colour and normals arrive as the 8-bit bytes a file holds. A depth arrives as its t, and
+//! its grey level (`image_io::depth_level`, computed in f64) is looked up among 255 bounds
+//! the host computes for the `-depth` range ([`depth_bounds`]), compared as ordered integers:
+//! the device does no float arithmetic, so every driver draws the host's levels.
 
 use super::error::GpuError;
 use super::layout::{BEYOND_REACH_WORD, CUT_SHORT_WORD};
@@ -22,6 +26,8 @@ pub struct Presenter {
     /// Whether a pixel was handed over (`handed_over` in the shader), and its copy for the host.
     flag: wgpu::Buffer,
     flag_read: wgpu::Buffer,
+    /// The depth's grey levels' bounds ([`depth_bounds`]; `depth_bounds` in the shader).
+    bounds: wgpu::Buffer,
 }
 
 /// How a frame went onto the texture ([`PreparedScene::present`]).
@@ -50,7 +56,8 @@ struct Enlarge {
     target_height: u32,
     row_texels: u32,
     bgra: u32,
-    _pad: [u32; 3],
+    depth: u32,
+    _pad: [u32; 2],
 }
 
 /// The enlarging pass's workgroup edge (`@workgroup_size(16, 16)` in the shader).
@@ -81,19 +88,15 @@ impl Presenter {
             cache: None,
         });
         use wgpu::BufferUsages as U;
-        let buffer = |label, usage| {
-            device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size: 4,
-                usage,
-                mapped_at_creation: false,
-            })
+        let buffer = |label, size, usage| {
+            device.create_buffer(&wgpu::BufferDescriptor { label: Some(label), size, usage, mapped_at_creation: false })
         };
         Presenter {
             pipeline,
             texels: std::sync::Mutex::new(None),
-            flag: buffer("handed_over", U::STORAGE | U::COPY_SRC | U::COPY_DST),
-            flag_read: buffer("handed_over_read", U::MAP_READ | U::COPY_DST),
+            flag: buffer("handed_over", 4, U::STORAGE | U::COPY_SRC | U::COPY_DST),
+            flag_read: buffer("handed_over_read", 4, U::MAP_READ | U::COPY_DST),
+            bounds: buffer("depth_bounds", 4 * 256, U::STORAGE | U::COPY_DST),
         }
     }
 
@@ -124,18 +127,92 @@ fn bgra(format: wgpu::TextureFormat) -> Option<bool> {
     }
 }
 
+/// The key that orders f32 values as unsigned integers (`f32::total_cmp`'s order): the sign
+/// bit flipped for positive numbers, every bit for negative ones.
+fn ordered_key(value: f32) -> u32 {
+    let bits = value.to_bits();
+    if bits >> 31 == 1 {
+        !bits
+    } else {
+        bits | 1 << 31
+    }
+}
+
+/// The f32 an [`ordered_key`] stands for.
+fn from_ordered_key(key: u32) -> f32 {
+    f32::from_bits(if key >> 31 == 1 { key & !(1 << 31) } else { !key })
+}
+
+/// For the depth view over `min < max`: `bounds[k]`, for k in 1..=255, is the [`ordered_key`]
+/// of the largest t whose level `image_io::depth_level(t, min, max)` is at least k, and
+/// `bounds[0]` is every key's. The level falls as t grows (`(max − t)/(max − min)`,
+/// rounded, clamped and floored, each step monotone), so a hit at t shows level L exactly
+/// where `ordered_key(t) ≤ bounds[k]` holds for k ≤ L and for no greater k; each bound is
+/// found by bisection over the keys between −∞ and +∞.
+fn depth_bounds(min: f32, max: f32) -> [u32; 256] {
+    assert!(min.is_finite() && max.is_finite() && min < max, "a depth range MIN < MAX");
+    let mut bounds = [u32::MAX; 256];
+    for (k, bound) in bounds.iter_mut().enumerate().skip(1) {
+        let at_least_k = |key: u32| usize::from(crate::image_io::depth_level(from_ordered_key(key), min, max)) >= k;
+        // Level 255 at −∞, 0 at +∞: the first holds at `low` and never at `high`.
+        let (mut low, mut high) = (ordered_key(f32::NEG_INFINITY), ordered_key(f32::INFINITY));
+        while high - low > 1 {
+            let middle = low + (high - low) / 2;
+            if at_least_k(middle) {
+                low = middle;
+            } else {
+                high = middle;
+            }
+        }
+        *bound = low;
+    }
+    bounds
+}
+
 impl PreparedScene<'_> {
     /// Renders every tile and draws it onto `target` (`Bgra8Unorm` or `Rgba8Unorm`, with
     /// `COPY_DST`), each rendered pixel a `scale × scale` block from the top left, the
     /// blocks past the target's edges cut off. The scene must be prepared packed
     /// (`GpuRenderer::prepare(…, true)`) for colour or normals, the two outputs whose 8-bit
-    /// image the kernel computes whole (the depth's range comes from the host), and the
-    /// image at least `target / scale` pixels on each side.
+    /// image the kernel computes whole, and the image at least `target / scale` pixels on
+    /// each side.
     ///
     /// The tiles take turns in the slots as [`PreparedScene::render`]'s do, one submission
     /// each; the queue orders each tile's pass after the previous tile's use of its slot.
     pub fn present(&self, presenter: &Presenter, target: &wgpu::Texture, scale: u32) -> Result<Presented, GpuError> {
-        self.check_drawable();
+        let (outputs, packed) = (self.dispatch.options.outputs, self.dispatch.layout.packed);
+        assert!(packed, "present draws a packed render");
+        // The words come in the order colour, normals, depth (super::layout::PixelLayout).
+        let shown = outputs.contains(Output::Color) || outputs.contains(Output::Normals);
+        assert!(shown, "present draws colour or normals");
+        self.draw(presenter, target, scale, false)
+    }
+
+    /// [`PreparedScene::present`] for a render of the depth alone, shown as `-depth MIN MAX`
+    /// shows it (`image_io::depth_image`): grey levels from `min` (white) to `max` (black),
+    /// black where nothing was hit. `min < max`, both finite.
+    pub fn present_depth(
+        &self,
+        presenter: &Presenter,
+        target: &wgpu::Texture,
+        scale: u32,
+        (min, max): (f32, f32),
+    ) -> Result<Presented, GpuError> {
+        let (outputs, packed) = (self.dispatch.options.outputs, self.dispatch.layout.packed);
+        assert!(packed && outputs == Output::Depth.into(), "present_depth draws a packed render of the depth alone");
+        let gpu = self.dispatch.gpu;
+        gpu.queue.write_buffer(&presenter.bounds, 0, bytemuck::cast_slice(&depth_bounds(min, max)));
+        self.draw(presenter, target, scale, true)
+    }
+
+    /// Draws the render's first word of each pixel: an 8-bit colour, or a depth (`depth`).
+    fn draw(
+        &self,
+        presenter: &Presenter,
+        target: &wgpu::Texture,
+        scale: u32,
+        depth: bool,
+    ) -> Result<Presented, GpuError> {
         let d = &self.dispatch;
         let (gpu, options) = (d.gpu, &d.options);
         let (target_width, target_height) = (target.width(), target.height());
@@ -159,6 +236,7 @@ impl PreparedScene<'_> {
             row_texels,
             bgra: bgra(target.format()).unwrap_or_else(|| panic!("present writes no {:?} texture", target.format()))
                 as u32,
+            depth: depth as u32,
             ..Enlarge::zeroed()
         };
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
@@ -175,18 +253,6 @@ impl PreparedScene<'_> {
         Ok(if handed_over { Presented::HandedOver } else { Presented::Drawn })
     }
 
-    /// Checks that the render is one the pass draws: packed, its first word colour or
-    /// normals (the words come in the order colour, normals, depth:
-    /// [`super::layout::PixelLayout`]), which the pass shows.
-    fn check_drawable(&self) {
-        let (outputs, packed) = (self.dispatch.options.outputs, self.dispatch.layout.packed);
-        assert!(packed, "present draws a packed render");
-        assert!(
-            outputs.contains(Output::Color) || outputs.contains(Output::Normals),
-            "present draws colour or normals"
-        );
-    }
-
     /// Renders the tile `uniform` names in `slot` and enlarges it into `texels`, in one
     /// submission.
     fn enlarge_tile(&self, presenter: &Presenter, texels: &wgpu::Buffer, slot: usize, uniform: &Enlarge) {
@@ -196,7 +262,8 @@ impl PreparedScene<'_> {
             contents: bytemuck::bytes_of(uniform),
             usage: wgpu::BufferUsages::UNIFORM,
         });
-        let bound = [&self.dispatch.slots[slot].buffers.output, texels, &presenter.flag, &uniform_buffer];
+        let output = &self.dispatch.slots[slot].buffers.output;
+        let bound = [output, texels, &presenter.flag, &uniform_buffer, &presenter.bounds];
         let entries: Vec<_> = bound
             .iter()
             .enumerate()
@@ -257,6 +324,35 @@ mod tests {
         naga::front::wgsl::parse_str(&source).unwrap_or_else(|e| panic!("{}", e.emit_to_string(&source)))
     }
 
+    /// Each bound is exactly where `image_io::depth_level` steps: level k or more at the
+    /// bound, less one key further; and counting bounds gives every depth's level, for
+    /// depths at and around every bound and spread over all floats, in ranges near and far
+    /// from zero, wide and thin.
+    #[test]
+    fn the_depth_bounds_are_where_the_levels_step() {
+        use crate::image_io::depth_level;
+        for (min, max) in [(9.0, 11.0), (0.5, 20.0), (-3.0, 2.0), (1e-3, 1e4), (1000.0, 1000.5), (-1e-30, 1e-30)] {
+            let bounds = depth_bounds(min, max);
+            let level_of = |t: f32| (1..256).filter(|&k| ordered_key(t) <= bounds[k]).count() as u8;
+            let mut depths = vec![f32::NEG_INFINITY, f32::INFINITY, 0.0, -0.0, min, max, f32::MIN_POSITIVE / 3.0];
+            for (k, &bound) in bounds.iter().enumerate().skip(1) {
+                let (at, past) = (from_ordered_key(bound), from_ordered_key(bound + 1));
+                assert!(depth_level(at, min, max) as usize >= k, "[{min}, {max}] level {k}: {at} is below it");
+                assert!(
+                    (depth_level(past, min, max) as usize) < k,
+                    "[{min}, {max}] level {k}: {past} still reaches it"
+                );
+                depths.extend([at, past, from_ordered_key(bound - 1)]);
+            }
+            // Keys spread over every float, NaNs (keys past ±∞) aside.
+            let (low, high) = (ordered_key(f32::NEG_INFINITY), ordered_key(f32::INFINITY));
+            depths.extend((0..4096u64).map(|k| from_ordered_key(low + ((high - low) as u64 * k / 4096) as u32)));
+            for t in depths {
+                assert_eq!(level_of(t), depth_level(t, min, max), "[{min}, {max}] t = {t:e}");
+            }
+        }
+    }
+
     /// The pass parses and validates, and the host's `Enlarge` and workgroup are the
     /// shader's, as naga reads them.
     #[test]
@@ -285,6 +381,7 @@ mod tests {
             ("target_height", std::mem::offset_of!(Enlarge, target_height)),
             ("row_texels", std::mem::offset_of!(Enlarge, row_texels)),
             ("bgra", std::mem::offset_of!(Enlarge, bgra)),
+            ("depth", std::mem::offset_of!(Enlarge, depth)),
         ];
         let host: Vec<(String, u32)> = host.iter().map(|&(n, o)| (n.to_string(), o as u32)).collect();
         assert_eq!(shader, host);

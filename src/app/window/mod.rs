@@ -208,8 +208,8 @@ impl<'a> LiveView<'a> {
         let start = Instant::now();
         let options = view_options(self.args, self.output, (WARM_UP_SIDE, WARM_UP_SIDE));
         // The kernel the frames drawn on the device run (8-bit pixels), where they are.
-        match device_drawn(backend, &self.scene, &options).and_then(|gpu| gpu.prepare(&self.scene, &options, true).ok())
-        {
+        let gpu = device_drawn(backend, &self.scene, self.args, &options);
+        match gpu.and_then(|gpu| gpu.prepare(&self.scene, &options, true).ok()) {
             Some(prepared) => {
                 prepared.render(|_| Ok::<(), Failure>(()))?;
             }
@@ -399,11 +399,17 @@ fn view_options(args: &RenderArgs, output: Output, (width, height): (u32, u32)) 
 }
 
 /// The GPU that draws the render `options` on the device, where one does: colour and
-/// normals, whose 8-bit images the kernel computes whole (the depth's range comes from the
-/// frame's hits, on the host), rendered by the GPU (`auto` may hand a scene to the
-/// reference).
-fn device_drawn<'r>(backend: &'r Renderer, scene: &Scene, options: &RenderOptions) -> Option<&'r GpuRenderer> {
-    let drawable = options.outputs.contains(Output::Color) || options.outputs.contains(Output::Normals);
+/// normals, whose 8-bit images the kernel computes whole, and the depth over the command
+/// line's `-depth` range (without one the range comes from the frame's hits, on the host),
+/// rendered by the GPU (`auto` may hand a scene to the reference).
+fn device_drawn<'r>(
+    backend: &'r Renderer,
+    scene: &Scene,
+    args: &RenderArgs,
+    options: &RenderOptions,
+) -> Option<&'r GpuRenderer> {
+    let shows_rgb = options.outputs.contains(Output::Color) || options.outputs.contains(Output::Normals);
+    let drawable = shows_rgb || args.files.depth_range().is_some();
     let (renderer, _) = backend.for_scene(scene, options);
     renderer.gpu().filter(|_| drawable)
 }
@@ -424,9 +430,13 @@ fn draw_on_device(
 ) -> Result<bool, Failure> {
     let (width, height) = screen.size();
     let options = view_options(args, output, (width.div_ceil(scale), height.div_ceil(scale)));
-    let Some(gpu) = device_drawn(backend, scene, &options) else { return Ok(false) };
+    let Some(gpu) = device_drawn(backend, scene, args, &options) else { return Ok(false) };
     let Ok(prepared) = gpu.prepare(scene, &options, true) else { return Ok(false) };
-    Ok(prepared.present(screen.presenter(), &frame.texture, scale)? == Presented::Drawn)
+    let presented = match (output, args.files.depth_range()) {
+        (Output::Depth, Some(range)) => prepared.present_depth(screen.presenter(), &frame.texture, scale, range)?,
+        _ => prepared.present(screen.presenter(), &frame.texture, scale)?,
+    };
+    Ok(presented == Presented::Drawn)
 }
 
 /// One output of `scene` at `size`, as the 8-bit RGB bytes its file would hold. Depth is
