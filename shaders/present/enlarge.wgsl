@@ -14,7 +14,7 @@ struct Enlarge {
     // The tile's first image row, and its rows.
     first_row: u32,
     rows: u32,
-    // Words per pixel; the first, colour or else normals, is shown.
+    // Words per pixel; the first (colour, else normals, else the depth) is shown.
     stride: u32,
     // Texels per rendered pixel, along each side.
     scale: u32,
@@ -41,7 +41,7 @@ struct Enlarge {
 @group(0) @binding(4) var<storage, read> depth_bounds: array<u32, 256>;
 
 // A float's bits as a key that orders floats as unsigned integers: the sign bit flipped for
-// positive numbers, every bit for negative ones (gpu::present::ordered_key).
+// positive numbers, every bit for negative ones (gpu::ordered::ordered_key).
 fn ordered_key(bits: u32) -> u32 {
     return select(bits | 0x80000000u, ~bits, (bits >> 31u) == 1u);
 }

@@ -511,9 +511,10 @@ pub fn run_batch(
     let mut preview_told = false;
     // The kernels of the lines after the one rendering, compiled meanwhile on every core (the
     // next lines' renders find them compiled, or wait for them: docs/SPEC.md §6).
-    let lookahead = Lookahead::new(lines.len(), compiling_threads());
+    let threads = compiling_threads();
+    let lookahead = Lookahead::new(lines.len(), threads);
     std::thread::scope(|scope| {
-        for _ in 0..compiling_threads() {
+        for _ in 0..threads {
             scope.spawn(|| {
                 while let Some(k) = lookahead.take() {
                     precompile_line(lines[k].1, backend);

@@ -15,6 +15,7 @@
 //! (orthographic) with edge planes computed once per frame ([`EyeTriangle`]).
 
 use super::layout::{BinItem, EyeTriangle, GpuTriangle, PrimitiveKind};
+use super::ordered::ordered_key;
 use crate::bvh::Aabb;
 use crate::camera::PrimaryRays;
 use glam::{DVec3, Vec3};
@@ -275,16 +276,9 @@ fn list_lengths(placed: &[Placed], columns: u32, rows: u32) -> (ListLengths, Vec
 
 /// `placed` sorted by the lower bound of their distance, as `f32::total_cmp` orders it,
 /// equal bounds in their order: [`sorted_by_key`] on the bits that order floats as
-/// unsigned integers (the sign flipped for positive numbers, every bit for negative ones).
+/// unsigned integers ([`ordered_key`]).
 fn sorted_by_near(placed: Vec<Placed>) -> Vec<Placed> {
-    sorted_by_key(placed, |p| {
-        let bits = p.item.near.to_bits();
-        if bits >> 31 == 1 {
-            !bits
-        } else {
-            bits | 1 << 31
-        }
-    })
+    sorted_by_key(placed, |p| ordered_key(p.item.near))
 }
 
 /// `items` sorted by `key`, stably: a least-significant-digit radix sort, one pass per byte

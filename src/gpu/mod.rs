@@ -29,6 +29,7 @@ mod kernel;
 pub mod layout;
 mod oneshot;
 mod options;
+mod ordered;
 mod parallel;
 pub mod pipeline_cache;
 pub mod precision;

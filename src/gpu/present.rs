@@ -5,11 +5,13 @@
 //!
 //! Colour and normals arrive as the 8-bit bytes a file holds. A depth arrives as its t, and
 //! its grey level (`image_io::depth_level`, computed in f64) is looked up among 255 bounds
-//! the host computes for the `-depth` range ([`depth_bounds`]), compared as ordered integers:
+//! the host computes for the `-depth` range ([`depth_bounds`]), compared as ordered integers
+//! ([`super::ordered`]):
 //! the device does no float arithmetic, so every driver draws the host's levels.
 
 use super::error::GpuError;
 use super::layout::{BEYOND_REACH_WORD, CUT_SHORT_WORD};
+use super::ordered::{from_ordered_key, ordered_key};
 use super::prepared::PreparedScene;
 use super::readback::map_and_wait;
 use super::renderer::GpuRenderer;
@@ -125,22 +127,6 @@ fn bgra(format: wgpu::TextureFormat) -> Option<bool> {
         wgpu::TextureFormat::Rgba8Unorm => Some(false),
         _ => None,
     }
-}
-
-/// The key that orders f32 values as unsigned integers (`f32::total_cmp`'s order): the sign
-/// bit flipped for positive numbers, every bit for negative ones.
-fn ordered_key(value: f32) -> u32 {
-    let bits = value.to_bits();
-    if bits >> 31 == 1 {
-        !bits
-    } else {
-        bits | 1 << 31
-    }
-}
-
-/// The f32 an [`ordered_key`] stands for.
-fn from_ordered_key(key: u32) -> f32 {
-    f32::from_bits(if key >> 31 == 1 { key & !(1 << 31) } else { !key })
 }
 
 /// For the depth view over `min < max`: `bounds[k]`, for k in 1..=255, is the [`ordered_key`]
