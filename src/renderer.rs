@@ -173,14 +173,22 @@ impl Renderer {
         }
     }
 
-    /// Compiles the GPU kernel of a render to come, where this renderer would render it
-    /// on the GPU ([`Renderer::for_scene`]; `packed`: 8-bit images, else floats), so that a
-    /// batch compiles the next line's kernel while it renders this one. What the GPU would
-    /// refuse is left for the render to refuse (or hand over).
+    /// How one thread of a batch compiles kernels ahead for this renderer
+    /// ([`GpuRenderer::ahead`]); `None` where it renders with the reference only.
     #[cfg(not(target_arch = "wasm32"))]
-    pub fn precompile(&self, scene: &Scene, options: &RenderOptions, packed: bool) {
-        if let (Renderer::Gpu(gpu, _), None) = (self, self.for_scene(scene, options).1) {
-            let _ = gpu.precompile(scene, options, packed);
+    pub fn ahead(&self) -> Option<crate::gpu::Ahead<'_>> {
+        self.gpu().map(GpuRenderer::ahead)
+    }
+
+    /// Compiles, with `ahead` (from [`Renderer::ahead`]), the GPU kernel of a render to
+    /// come, where this renderer would render it on the GPU ([`Renderer::for_scene`];
+    /// `packed`: 8-bit images, else floats), so that a batch compiles the next lines'
+    /// kernels while it renders this one. What the GPU would refuse is left for the render
+    /// to refuse (or hand over).
+    #[cfg(not(target_arch = "wasm32"))]
+    pub fn precompile(&self, ahead: &crate::gpu::Ahead<'_>, scene: &Scene, options: &RenderOptions, packed: bool) {
+        if let (Renderer::Gpu(..), None) = (self, self.for_scene(scene, options).1) {
+            let _ = ahead.precompile(scene, options, packed);
         }
     }
 

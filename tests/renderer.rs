@@ -113,6 +113,37 @@ fn render_or_stop_stops_where_the_caller_says() {
     assert_eq!(whole.frame, raycaster::cpu::render(&scene, &options));
 }
 
+/// On lavapipe, which compiles a kernel at its first dispatch, a batch's threads also
+/// dispatch it once on twin devices of their own, whose machine code Mesa's disk cache hands
+/// to the renderer's device (gpu::ahead): the image is the one a renderer that compiled its
+/// kernel at its own dispatch renders. Everywhere the pipeline is created ahead on the
+/// renderer's own device, and the render finds it there.
+#[test]
+fn a_kernel_compiled_on_a_twin_device_renders_the_same_image() {
+    let Some(shared) = common::gpu() else { return };
+    let gpu = shared.on_same_device(GpuOptions::default());
+    let info = gpu.adapter_info();
+    let lavapipe = info.driver.contains("llvmpipe") || info.name.contains("llvmpipe");
+    let cache_switch = ["MESA_SHADER_CACHE_DISABLE", "MESA_GLSL_CACHE_DISABLE"].map(std::env::var_os);
+    let ahead = gpu.ahead();
+    if !lavapipe || cache_switch.iter().all(Option::is_none) {
+        assert_eq!(ahead.on_twin(), lavapipe, "{}: {}", info.name, info.driver);
+    }
+    let scene = sphere_at(1.5);
+    let options = RenderOptions {
+        shading: raycaster::render::Shading { shadows: true, ..Default::default() },
+        ..RenderOptions::all(37, 29)
+    };
+    ahead.precompile(&scene, &options, false).unwrap();
+    ahead.precompile(&scene, &options, false).unwrap();
+    assert_eq!(gpu.kernels_compiled(), 1, "a kernel compiled ahead is not compiled twice");
+    let (frame, _) = common::render_gpu_tiles(&gpu, &scene, &options);
+    assert_eq!(gpu.kernels_compiled(), 1, "the render found its pipeline created ahead");
+    let (compiled_at_dispatch, _) =
+        common::render_gpu_tiles(&shared.on_same_device(GpuOptions::default()), &scene, &options);
+    assert_eq!(frame, compiled_at_dispatch);
+}
+
 /// A batch compiles the next line's kernel while it renders this one: the render then finds
 /// it compiled, and two threads asking for one kernel at once compile it once.
 #[test]
@@ -138,6 +169,6 @@ fn a_kernel_compiled_ahead_is_compiled_once() {
     let on_cpu = gpu.adapter_info().device_type == wgpu::DeviceType::Cpu;
     let auto = Renderer::on_gpu(gpu.on_same_device(GpuOptions::default()), BackendChoice::Auto);
     let tree = RenderOptions { shading: raycaster::render::Shading { shadows: true, ..options.shading }, ..options };
-    auto.precompile(&scene, &tree, true);
+    auto.precompile(&auto.ahead().unwrap(), &scene, &tree, true);
     assert_eq!(auto.gpu().unwrap().kernels_compiled(), usize::from(!on_cpu));
 }

@@ -512,12 +512,14 @@ pub fn run_batch(
     // The kernels of the lines after the one rendering, compiled meanwhile on every core (the
     // next lines' renders find them compiled, or wait for them: docs/SPEC.md §6).
     let threads = compiling_threads();
-    let lookahead = Lookahead::new(lines.len(), threads);
+    let lookahead = Lookahead::new(lines.len(), LINES_AHEAD);
     std::thread::scope(|scope| {
         for _ in 0..threads {
             scope.spawn(|| {
+                // The reference alone has nothing to compile.
+                let Some(ahead) = backend.ahead() else { return };
                 while let Some(k) = lookahead.take() {
-                    precompile_line(lines[k].1, backend);
+                    precompile_line(lines[k].1, backend, &ahead);
                 }
             });
         }
@@ -566,7 +568,7 @@ pub fn run_batch(
 }
 
 /// Threads that compile a batch's next kernels: one per core, at most
-/// [`MAX_COMPILING_THREADS`]; as many lines ahead of the one rendering.
+/// [`MAX_COMPILING_THREADS`].
 fn compiling_threads() -> usize {
     std::thread::available_parallelism().map_or(1, |n| n.get()).min(MAX_COMPILING_THREADS)
 }
@@ -575,17 +577,23 @@ fn compiling_threads() -> usize {
 /// enough that scenes loaded ahead stay few.
 const MAX_COMPILING_THREADS: usize = 4;
 
+/// How far past the line rendering the compiling threads take lines: past a run of lines that
+/// share a kernel (assignment 4's six `-bounces` of one scene) to the next kernels, while
+/// the kernels compiled ahead stay few beside the renderer's cache of kernels. A line whose
+/// kernel is known costs a thread its parsing and plan only.
+const LINES_AHEAD: usize = 8;
+
 /// Compiles the GPU kernel a batch's `line` will need, where it is a render the GPU would
 /// run ([`Renderer::precompile`]); a line that does not parse or load is left for its turn
 /// to report.
-fn precompile_line(line: &str, backend: &Renderer) {
+fn precompile_line(line: &str, backend: &Renderer, ahead: &raycaster::gpu::Ahead<'_>) {
     let words: Vec<&str> = line.split_whitespace().collect();
     let Ok(Command::Render(args)) = cli::parse_args(&words) else { return };
     if !args.writes_something() {
         return;
     }
     let Ok((scene, _)) = load(&args) else { return };
-    backend.precompile(&scene, &options_for(&args), !reads_floats(&OutputFile::list(&args.files)));
+    backend.precompile(ahead, &scene, &options_for(&args), !reads_floats(&OutputFile::list(&args.files)));
 }
 
 /// Whether a render writing `outputs` reads floats back (an EXR file among them), else 8-bit

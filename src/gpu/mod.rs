@@ -17,6 +17,7 @@
 //! rendered, on a thread of ours or awaited in a browser); `present` (its tiles drawn onto
 //! a texture on the device, for the live window).
 
+mod ahead;
 mod bindings;
 pub mod binning;
 mod dispatch;
@@ -51,6 +52,7 @@ mod upload;
 pub mod voxels;
 mod workgroup;
 
+pub use ahead::Ahead;
 pub use bindings::Binding;
 pub use error::GpuError;
 pub use kernel::{KernelConfig, Stage, SHARED_KERNEL_MAX_SAMPLES};

@@ -15,7 +15,7 @@ use super::kernel::KernelConfig;
 use super::layout::{GpuTexture, Params, PixelLayout, SWITCH_ORTHOGRAPHIC, SWITCH_SHADE_BACK};
 use super::parallel::in_parallel;
 use super::readback::Counters;
-use super::renderer::{Compiled, GpuRenderer};
+use super::renderer::{Compiled, GpuRenderer, KernelKey};
 use super::tiles::{SlotSizes, TileBuffers, TileSlot, Tiling};
 use super::upload::{upload_inputs, Inputs};
 use super::{precision, texture_range, unsupported, voxels};
@@ -34,6 +34,9 @@ pub struct PreparedScene<'a> {
     pub(super) fallback: Option<Scene>,
     /// The kernel's `-stats` counts, shared by every tile (bound to every slot).
     pub(super) counters: Counters,
+    /// The kernel the tiles dispatch first ([`super::ahead`], which a browser does without).
+    #[cfg_attr(target_arch = "wasm32", allow(dead_code))]
+    pub(super) first_kernel: KernelKey,
 }
 
 impl GpuRenderer {
@@ -42,8 +45,19 @@ impl GpuRenderer {
     /// while it renders this one, and the next line's `prepare` finds it compiled, or
     /// waits for it. Refuses what `prepare` refuses.
     pub fn precompile(&self, scene: &Scene, options: &RenderOptions, packed: bool) -> Result<(), GpuError> {
+        self.precompile_first(scene, options, packed).map(drop)
+    }
+
+    /// [`GpuRenderer::precompile`], naming the kernel a render dispatches first
+    /// ([`super::ahead`]).
+    pub(super) fn precompile_first(
+        &self,
+        scene: &Scene,
+        options: &RenderOptions,
+        packed: bool,
+    ) -> Result<KernelKey, GpuError> {
         let planned = Planned::new(self, scene, options, PixelLayout::new(options, packed))?;
-        Compiled::new(self, planned.config, options, &scene.path).map(drop)
+        Compiled::new(self, planned.config, options, &scene.path).map(|compiled| compiled.first)
     }
 
     /// Flattens, uploads and binds `scene` for the outputs `options` asks for, once; the
@@ -81,6 +95,12 @@ impl<'a> PreparedScene<'a> {
         );
         let (config, unplanned, uploaded) = uploaded?;
         let compiled = unplanned.unwrap_or(compiled)?;
+        let first_kernel = compiled.first;
+        // Where the driver compiles at the first dispatch, a kernel a batch's twin device is
+        // compiling is waited for: Mesa's cache then hands it over (super::ahead).
+        if let Some(first_dispatches) = &gpu.first_dispatches {
+            first_dispatches.wait_or_claim(first_kernel);
+        }
         let counters = Counters::new(gpu, options.stats);
         let stats = RenderStats {
             kernel_ns: gpu.timestamps.then_some(0),
@@ -99,6 +119,7 @@ impl<'a> PreparedScene<'a> {
             stats: RenderStats { prepare_ms: start.elapsed().as_secs_f64() * 1e3, ..stats },
             fallback: (config.loop_canary || config.textures).then(|| scene.clone()),
             counters,
+            first_kernel,
         })
     }
 }
@@ -275,7 +296,7 @@ impl Uploaded {
         options: &RenderOptions,
         layout: PixelLayout,
     ) -> Dispatch<'a> {
-        let Compiled { bindings, pipeline, sampled } = compiled;
+        let Compiled { bindings, pipeline, sampled, .. } = compiled;
         let slots = self
             .slot_buffers
             .into_iter()

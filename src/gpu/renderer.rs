@@ -1,6 +1,7 @@
 //! The renderer: a wgpu device opened as the kernel needs it, what the adapter allows, and
 //! the kernels compiled on it (cached by their configuration and bindings).
 
+use super::ahead::FirstDispatches;
 use super::bindings::{self, Binding, BindingSet};
 use super::error::GpuError;
 use super::kernel::{KernelConfig, Stage};
@@ -16,6 +17,9 @@ use std::sync::{Arc, Mutex, OnceLock};
 /// Kernels a renderer keeps compiled (see [`GpuRenderer::pipeline`]).
 const MAX_CACHED_PIPELINES: usize = 32;
 
+/// A kernel as the pipelines' cache names it: its configuration and its bindings' mask.
+pub(super) type KernelKey = (KernelConfig, u32);
+
 /// A wgpu device with the ray-casting kernel, ready to render scenes.
 pub struct GpuRenderer {
     pub(super) device: wgpu::Device,
@@ -30,7 +34,7 @@ pub struct GpuRenderer {
     /// Each kernel compiled or being compiled, by its configuration and bindings: a thread
     /// that asks for one another thread is compiling waits for it rather than compile it too
     /// (a batch compiles the next line's kernel while it renders this one).
-    pipelines: Mutex<HashMap<(KernelConfig, u32), Arc<OnceLock<wgpu::ComputePipeline>>>>,
+    pipelines: Mutex<HashMap<KernelKey, Arc<OnceLock<wgpu::ComputePipeline>>>>,
     /// Kernels this renderer compiled ([`GpuRenderer::kernels_compiled`]).
     compiled: std::sync::atomic::AtomicUsize,
     /// The kernels compiled by earlier processes, where the adapter keeps them
@@ -38,6 +42,13 @@ pub struct GpuRenderer {
     pipeline_cache: Option<Arc<PipelineCache>>,
     pub(super) options: GpuOptions,
     pub(super) timestamps: bool,
+    /// The adapter the device was opened on, where this renderer opened it: a twin device
+    /// ([`super::ahead`]) opens on it too.
+    pub(super) adapter: Option<wgpu::Adapter>,
+    /// Where the driver compiles a kernel at its first dispatch: the kernels dispatched
+    /// once, here or on a twin device ([`super::ahead`]); shared with the renderers on this
+    /// device. `None` elsewhere, and on a twin itself.
+    pub(super) first_dispatches: Option<Arc<FirstDispatches>>,
 }
 
 impl GpuRenderer {
@@ -80,6 +91,15 @@ impl GpuRenderer {
     /// Opens `adapter`'s device as the kernel needs it, and a renderer on it (for a caller
     /// that chose the adapter, such as one that presents to a window).
     pub async fn on_adapter(adapter: &wgpu::Adapter, options: GpuOptions) -> Result<GpuRenderer, GpuError> {
+        let mut gpu = Self::open_device(adapter, options).await?;
+        if super::ahead::compiles_at_first_dispatch(&gpu.adapter_info) {
+            gpu.first_dispatches = Some(Arc::new(FirstDispatches::open(&gpu.adapter_info)));
+        }
+        Ok(gpu)
+    }
+
+    /// [`GpuRenderer::on_adapter`], without first dispatches.
+    async fn open_device(adapter: &wgpu::Adapter, options: GpuOptions) -> Result<GpuRenderer, GpuError> {
         // The defaults are below what lavapipe and real GPUs offer (docs/lavapipe.md); ask for all.
         let limits = adapter.limits();
         // Kernel time from the GPU's own clock where the adapter offers it (lavapipe does).
@@ -112,7 +132,20 @@ impl GpuRenderer {
             })
             .await
             .map_err(|e| GpuError::Device(e.to_string()))?;
-        Ok(Self::with_device(adapter.get_info(), device, queue, options))
+        let gpu = Self::with_device(adapter.get_info(), device, queue, options);
+        Ok(GpuRenderer { adapter: Some(adapter.clone()), ..gpu })
+    }
+
+    /// A second device on this renderer's adapter, opened as this one was, for compiling
+    /// kernels ahead ([`super::ahead`]): it keeps no pipeline cache file of its own and
+    /// shares no first dispatches. `None` where this renderer did not open its device.
+    #[cfg(not(target_arch = "wasm32"))]
+    pub(super) fn twin(&self) -> Option<Result<GpuRenderer, GpuError>> {
+        let adapter = self.adapter.as_ref()?;
+        Some(pollster::block_on(Self::open_device(adapter, self.options)).map(|twin| {
+            // Its compiles are kept in the driver's cache; the renderer's file is its own.
+            GpuRenderer { pipeline_cache: None, ..twin }
+        }))
     }
 
     /// Renders on a device the caller opened (as wgpu's examples hand theirs to `init`).
@@ -148,6 +181,8 @@ impl GpuRenderer {
             compiled: Default::default(),
             pipeline_cache,
             options,
+            adapter: None,
+            first_dispatches: None,
         }
     }
 
@@ -155,7 +190,11 @@ impl GpuRenderer {
     /// no second device).
     pub fn on_same_device(&self, options: GpuOptions) -> GpuRenderer {
         let (info, device, queue) = (self.adapter_info.clone(), self.device.clone(), self.queue.clone());
-        Self::sharing_cache(info, device, queue, options, self.pipeline_cache.clone())
+        GpuRenderer {
+            adapter: self.adapter.clone(),
+            first_dispatches: self.first_dispatches.clone(),
+            ..Self::sharing_cache(info, device, queue, options, self.pipeline_cache.clone())
+        }
     }
 
     /// How many kernels this renderer has compiled (found in none of its own caches; the
@@ -194,9 +233,7 @@ impl GpuRenderer {
     /// lavapipe's compiler ends loops after [`flatten::LOOP_LIMIT`] (docs/lavapipe.md);
     /// other drivers have no such limit.
     pub fn loop_limit(&self) -> Option<u32> {
-        let info = &self.adapter_info;
-        let lavapipe = info.driver.contains("llvmpipe") || info.name.contains("llvmpipe");
-        lavapipe.then_some(flatten::LOOP_LIMIT)
+        is_lavapipe(&self.adapter_info).then_some(flatten::LOOP_LIMIT)
     }
 
     /// Whether the host maps the buffers the kernel binds (its tiles' pixels, the bins'
@@ -290,6 +327,11 @@ impl GpuRenderer {
     }
 }
 
+/// Whether `info` is lavapipe's (Mesa's llvmpipe under Vulkan).
+pub(super) fn is_lavapipe(info: &wgpu::AdapterInfo) -> bool {
+    info.driver.contains("llvmpipe") || info.name.contains("llvmpipe")
+}
+
 /// The two passes of a render with several samples per pixel (docs/SPEC.md §8).
 pub(super) struct Sampled {
     pub sampling: Sampling,
@@ -300,6 +342,9 @@ pub(super) struct Sampled {
 /// A kernel's bindings and pipelines: the pixels kernel of a render without sampling, the
 /// samples and filter kernels of one with it.
 pub(super) struct Compiled {
+    /// The kernel a render dispatches first (its pixels kernel, or its samples kernel) and
+    /// its bindings: what [`super::ahead`] compiles by dispatching it.
+    pub first: KernelKey,
     pub bindings: BindingSet,
     pub pipeline: Option<wgpu::ComputePipeline>,
     pub sampled: Option<Sampled>,
@@ -314,13 +359,9 @@ impl Compiled {
         options: &RenderOptions,
         file: &std::path::Path,
     ) -> Result<Compiled, GpuError> {
-        let stages = match options.sampling {
-            None => vec![config],
-            Some(_) => {
-                [Stage::Pixels, Stage::Samples, Stage::Filter].map(|stage| KernelConfig { stage, ..config }).to_vec()
-            }
-        };
+        let stages = Self::stages(config, options);
         let bindings = gpu.bindings_for(&stages, file)?;
+        let first = Self::first(config, options, &bindings);
         // A sampled render dispatches its samples and filter kernels only.
         let (pipeline, sampled) = match options.sampling {
             None => (Some(gpu.pipeline(config, &bindings)), None),
@@ -329,6 +370,22 @@ impl Compiled {
                 (None, Some(Sampled { sampling, samples: stage(Stage::Samples), filter: stage(Stage::Filter) }))
             }
         };
-        Ok(Compiled { bindings, pipeline, sampled })
+        Ok(Compiled { first, bindings, pipeline, sampled })
+    }
+
+    /// The kernels of `config` a render as `options` say binds.
+    fn stages(config: KernelConfig, options: &RenderOptions) -> Vec<KernelConfig> {
+        match options.sampling {
+            None => vec![config],
+            Some(_) => {
+                [Stage::Pixels, Stage::Samples, Stage::Filter].map(|stage| KernelConfig { stage, ..config }).to_vec()
+            }
+        }
+    }
+
+    /// The kernel of `config` a render as `options` say dispatches first, and its bindings.
+    fn first(config: KernelConfig, options: &RenderOptions, bindings: &BindingSet) -> KernelKey {
+        let stage = if options.sampling.is_some() { Stage::Samples } else { config.stage };
+        (KernelConfig { stage, ..config }, bindings.mask)
     }
 }
