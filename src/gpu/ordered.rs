@@ -13,7 +13,9 @@ pub fn ordered_key(value: f32) -> u32 {
     }
 }
 
-/// The float an [`ordered_key`] stands for.
+/// The float an [`ordered_key`] stands for (the depth view's bounds: not in a browser, which
+/// has no window of ours).
+#[cfg_attr(target_arch = "wasm32", allow(dead_code))]
 pub fn from_ordered_key(key: u32) -> f32 {
     f32::from_bits(if key >> 31 == 1 { key & !(1 << 31) } else { !key })
 }
