@@ -29,7 +29,7 @@ fn box_entry(node: BvhNode, ray: Ray, inv: vec3<f32>, parallel: vec3<bool>, tmin
 // What leaf slot k holds: a prim_refs entry, or with triangles alone (reordered into leaf
 // order by the host) the triangle index itself, one load fewer.
 fn leaf_slot(k: u32) -> u32 {
-    if (!HAS_SPHERES && !HAS_ELLIPSOIDS) {
+    if (triangles_alone()) {
         return k;
     }
     return prim_refs[k];

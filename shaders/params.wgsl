@@ -129,7 +129,7 @@ struct Params {
     bounces: u32,
     // The scene's lights (SHARED_KERNEL; otherwise NUM_LIGHTS).
     num_lights: u32,
-    // SWITCH_SHADE_BACK and SWITCH_ORTHOGRAPHIC (SHARED_KERNEL).
+    // SWITCH_SHADE_BACK, SWITCH_ORTHOGRAPHIC and SWITCH_TRIANGLES_ALONE (SHARED_KERNEL).
     switches: u32,
 }
 
@@ -155,6 +155,15 @@ fn orthographic() -> bool {
         return (P.switches & SWITCH_ORTHOGRAPHIC) != 0u;
     }
     return ORTHOGRAPHIC;
+}
+
+// Whether the scene's finite primitives are triangles alone (a shared kernel compiles the
+// kinds in whether the scene has them or not).
+fn triangles_alone() -> bool {
+    if (SHARED_KERNEL) {
+        return (P.switches & SWITCH_TRIANGLES_ALONE) != 0u;
+    }
+    return !HAS_SPHERES && !HAS_ELLIPSOIDS;
 }
 
 // A sphere in world space (a similarity transform was baked into it).

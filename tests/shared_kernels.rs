@@ -1,6 +1,7 @@
 //! Kernels shared by small renders (`gpu::KernelConfig::shared`): the light count,
 //! `-shade_back` and the camera's kind read from the parameters, point lights, specular
-//! colours, several materials and (where the adapter binds every buffer) planes compiled in. A shared kernel must render what its
+//! colours, several materials and (where the adapter binds every buffer) spheres, planes and
+//! triangles compiled in. A shared kernel must render what its
 //! scene's own kernel renders (the one the reference tests hold to the contract at sizes
 //! past the sharing limit), and it must actually be shared.
 
@@ -129,6 +130,38 @@ fn shared_kernels_render_the_course_scenes_as_their_own_kernels() {
         found.extend(differences(&shared, &own, &path.display().to_string(), &scene, 64));
     }
     assert!(found.is_empty(), "{} renders differ:\n{}", found.len(), found.join("\n"));
+}
+
+/// Where the adapter binds every buffer, spheres, planes and triangles are compiled into a
+/// shared kernel whether the scene has them or not: scenes of spheres alone, of triangles
+/// alone and of both share one kernel, each image its own kernel's. Elsewhere each kind
+/// keeps its bindings, and so its kernels.
+#[test]
+fn small_renders_of_spheres_or_triangles_alone_share_one_kernel_where_every_buffer_binds() {
+    let Some((shared, own)) = renderers() else { return };
+    let every_buffer =
+        shared.device().limits().max_storage_buffers_per_shader_stage as usize >= raycaster::gpu::Binding::ALL.len();
+    let objects = [
+        "numObjects 2 MaterialIndex 0 Sphere { center 0 0 0 radius 1 } Plane { normal 0 1 0 offset -1 }",
+        "numObjects 1 MaterialIndex 0 Triangle { vertex0 -2 -1 0 vertex1 2 -1 0 vertex2 0 2 0 }",
+        "numObjects 2 MaterialIndex 0 Sphere { center 1 0 1 radius 0.5 } Triangle { vertex0 -2 -1 0 vertex1 2 -1 0 vertex2 0 2 0 }",
+    ];
+    let options = RenderOptions { shading: shadings()[1], ..RenderOptions::all(32, 32) };
+    for (k, group) in objects.iter().enumerate() {
+        let text = format!(
+            "{PERSPECTIVE}
+             Lights {{ numLights 1 DirectionalLight {{ direction -0.5 -1 -1 color 0.8 0.8 0.8 }} }}
+             Background {{ color 0.1 0.1 0.2 ambientLight 0.1 0.1 0.1 }}
+             Materials {{ numMaterials 1 PhongMaterial {{ diffuseColor 0.8 0.3 0.3 }} }}
+             Group {{ {group} }}"
+        );
+        let scene = parse_scene(&text, Path::new("kinds.txt")).expect("the generated scene parses");
+        let (a, b) = (shared.render(&scene, &options).unwrap(), own.render(&scene, &options).unwrap());
+        assert!(a.hit.iter().any(|&h| h) && a.hit.iter().any(|&h| !h), "scene {k} hits and misses");
+        assert_eq!(first_difference(&a, &b), None, "scene {k}");
+    }
+    assert_eq!(own.kernels_compiled(), 3);
+    assert_eq!(shared.kernels_compiled(), if every_buffer { 1 } else { 3 });
 }
 
 /// A scene: `lights` directional lights, or one point light, two spheres, a plane and a

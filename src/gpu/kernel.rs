@@ -60,9 +60,9 @@ pub struct KernelConfig {
 }
 
 /// Renders of at most this many samples (pixels × samples per pixel) share kernels
-/// ([`KernelConfig::shared`]): assignment 4's 200² lines compile 6 kernels instead of 13 on
+/// ([`KernelConfig::shared`]): assignment 4's 200² lines compile 4 kernels instead of 13 on
 /// lavapipe. The branches a shared kernel keeps cost the heaviest of those lines 5 % of its
-/// kernel's time; at this size that is about 50 ms, where compiling a kernel of its own
+/// kernel's time (a scene of triangles alone about 10 %); at this size that is about 50 ms, where compiling a kernel of its own
 /// costs lavapipe 0.1 to 2 s (docs/performance.md, "Compiles").
 pub const SHARED_KERNEL_MAX_SAMPLES: u64 = 512 * 512;
 
@@ -143,10 +143,11 @@ impl KernelConfig {
     /// renders, or their compiled-in camera is in the hot loop.
     ///
     /// Where the adapter takes every binding (`every_binding`,
-    /// [`GpuRenderer::binds_every_buffer`](super::GpuRenderer::binds_every_buffer)), planes
-    /// are compiled in too, and a scene without lights shares as well. Elsewhere the shared
-    /// kernel binds only what the scene's own binds: planes and the lights' buffer would be
-    /// a binding more, past a limit the scene's own kernel keeps within.
+    /// [`GpuRenderer::binds_every_buffer`](super::GpuRenderer::binds_every_buffer)), spheres,
+    /// planes and triangles are compiled in too (a loop over none of them tests nothing),
+    /// and a scene without lights shares as well. Elsewhere the shared kernel binds only what
+    /// the scene's own binds: another kind of primitive or the lights' buffer would be a
+    /// binding more, past a limit the scene's own kernel keeps within.
     pub fn shared(self, every_binding: bool) -> KernelConfig {
         if self.use_bins || self.use_grid || self.voxels || (self.num_lights == 0 && !every_binding) {
             return self;
@@ -159,7 +160,9 @@ impl KernelConfig {
             specular: true,
             point_lights: true,
             one_material: false,
+            has_spheres: self.has_spheres || every_binding,
             has_planes: self.has_planes || every_binding,
+            has_triangles: self.has_triangles || every_binding,
             ..self
         }
     }
@@ -264,24 +267,28 @@ mod tests {
 
     /// Where the adapter does not take every binding, a shared kernel binds exactly the
     /// buffers its scene's own kernel binds: sharing must never take a scene past the
-    /// adapter's limit. Where it does, planes are shared too.
+    /// adapter's limit. Where it does, spheres, planes and triangles are compiled in too:
+    /// scenes of spheres alone, of triangles alone and of both share one kernel, which
+    /// binds what each of their own kernels binds.
     #[test]
     fn a_shared_kernel_binds_what_its_own_kernel_binds() {
         let tree = Shading { shadows: true, bounces: 2, ..Shading::default() };
         let referenced = |c: &KernelConfig| super::super::bindings::referenced(&c.module());
-        let planes = 1 << super::super::Binding::Planes.index();
         for shading in [Shading::default(), Shading { shadows: true, ..Shading::default() }, tree] {
             for acceleration in [Acceleration::Flat, Acceleration::Hierarchy] {
                 let own = scene_config(shading, acceleration);
+                let mut roomy_kernels = Vec::new();
                 for (has_spheres, has_triangles, num_lights) in [(true, true, 1), (false, true, 3), (true, false, 2)] {
                     let config = KernelConfig { has_spheres, has_triangles, num_lights, ..own };
                     let within_limits = config.shared(false);
                     assert!(within_limits.shared);
                     assert_eq!(referenced(&within_limits), referenced(&config), "{config:?}");
                     let roomy = config.shared(true);
-                    assert!(roomy.shared && roomy.has_planes);
-                    assert_eq!(referenced(&roomy), referenced(&config) | planes, "{config:?}");
+                    assert!(roomy.shared && roomy.has_planes && roomy.has_spheres && roomy.has_triangles);
+                    assert_eq!(referenced(&roomy) & referenced(&config), referenced(&config), "{config:?}");
+                    roomy_kernels.push(roomy);
                 }
+                assert!(roomy_kernels.windows(2).all(|w| w[0] == w[1]), "{roomy_kernels:?}");
             }
         }
         let no_lights = KernelConfig { num_lights: 0, ..scene_config(Shading::default(), Acceleration::Flat) };

@@ -48,8 +48,9 @@ pub struct Params {
     /// The scene's lights: the light loop's count in a kernel shared by small renders
     /// (`SHARED_KERNEL`; other kernels have it compiled in as `NUM_LIGHTS`).
     pub num_lights: u32,
-    /// [`SWITCH_SHADE_BACK`] and [`SWITCH_ORTHOGRAPHIC`]: what a kernel shared by small
-    /// renders reads here instead of its own `SHADE_BACK` and `ORTHOGRAPHIC`.
+    /// [`SWITCH_SHADE_BACK`], [`SWITCH_ORTHOGRAPHIC`] and [`SWITCH_TRIANGLES_ALONE`]: what a
+    /// kernel shared by small renders reads here instead of its own `SHADE_BACK`,
+    /// `ORTHOGRAPHIC` and primitive kinds.
     pub switches: u32,
 }
 
@@ -57,6 +58,11 @@ pub struct Params {
 pub const SWITCH_SHADE_BACK: u32 = 1;
 /// `Params::switches`: the camera is orthographic.
 pub const SWITCH_ORTHOGRAPHIC: u32 = 2;
+/// `Params::switches`: the scene's finite primitives are triangles alone, so the
+/// hierarchy's leaves hold the triangles' own indices, in leaf order, not references
+/// (`SceneBuffers::build_bvh`): what a shared kernel, which has spheres compiled in, cannot
+/// tell from its kinds.
+pub const SWITCH_TRIANGLES_ALONE: u32 = 4;
 
 /// WGSL `Sampling` (shaders/sampling.wgsl): the sampler, the filter, and the rows of samples
 /// one tile holds (docs/SPEC.md §8).

@@ -12,7 +12,7 @@ use super::dispatch::Dispatch;
 use super::error::GpuError;
 use super::flatten::{self, GridChoice, SceneBuffers};
 use super::kernel::KernelConfig;
-use super::layout::{GpuTexture, Params, PixelLayout, SWITCH_ORTHOGRAPHIC, SWITCH_SHADE_BACK};
+use super::layout::{GpuTexture, Params, PixelLayout, SWITCH_ORTHOGRAPHIC, SWITCH_SHADE_BACK, SWITCH_TRIANGLES_ALONE};
 use super::parallel::in_parallel;
 use super::readback::Counters;
 use super::renderer::{Compiled, GpuRenderer, KernelKey};
@@ -110,7 +110,7 @@ impl<'a> PreparedScene<'a> {
         let params = Params {
             weight: options.shading.weight as f32,
             bounces: traced.tree.depth,
-            switches: switches(buffers.orthographic, options.shading.shade_back),
+            switches: switches(&buffers, options.shading.shade_back),
             ..buffers.params
         };
         let dispatch = uploaded.dispatch(gpu, compiled, &counters, &mut buffers, (config, params), options, layout);
@@ -125,8 +125,16 @@ impl<'a> PreparedScene<'a> {
 }
 
 /// `Params::switches`: what a shared kernel reads instead of compiling it in.
-fn switches(orthographic: bool, shade_back: bool) -> u32 {
-    (if orthographic { SWITCH_ORTHOGRAPHIC } else { 0 }) | if shade_back { SWITCH_SHADE_BACK } else { 0 }
+fn switches(buffers: &SceneBuffers, shade_back: bool) -> u32 {
+    let triangles_alone = buffers.spheres.is_empty() && buffers.ellipsoids.is_empty();
+    [
+        (buffers.orthographic, SWITCH_ORTHOGRAPHIC),
+        (shade_back, SWITCH_SHADE_BACK),
+        (triangles_alone, SWITCH_TRIANGLES_ALONE),
+    ]
+    .iter()
+    .filter(|(on, _)| *on)
+    .fold(0, |switches, (_, bit)| switches | bit)
 }
 
 /// A render checked, planned and flattened, and the kernel of its plan: what

@@ -90,6 +90,11 @@ pub fn host_constants() -> String {
         ("STATS_WORDS", super::layout::STATS_WORDS, "words of one slot of the -stats counters (gpu::layout)"),
         ("SWITCH_SHADE_BACK", super::layout::SWITCH_SHADE_BACK, "Params.switches: -shade_back (gpu::layout)"),
         ("SWITCH_ORTHOGRAPHIC", super::layout::SWITCH_ORTHOGRAPHIC, "Params.switches: an orthographic camera"),
+        (
+            "SWITCH_TRIANGLES_ALONE",
+            super::layout::SWITCH_TRIANGLES_ALONE,
+            "Params.switches: the hierarchy's leaves hold triangle indices",
+        ),
     ];
     for (name, value, what) in sizes {
         let _ = writeln!(out, "// {what}\nconst {name}: u32 = {value}u;");
