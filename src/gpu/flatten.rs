@@ -217,6 +217,12 @@ impl SceneBuffers {
         self.bvh = self.build_bvh(self.bvh_min_primitives(options));
     }
 
+    /// Whether the finite primitives are triangles alone: then the hierarchy's leaves hold
+    /// the triangles themselves, in leaf order, and no references (`build_bvh`).
+    pub fn triangles_alone(&self) -> bool {
+        self.spheres.is_empty() && self.ellipsoids.is_empty()
+    }
+
     /// Spheres, ellipsoids and triangles: what bins and the hierarchy hold.
     fn finite(&self) -> usize {
         self.triangles.len() + self.spheres.len() + self.ellipsoids.len()
@@ -273,7 +279,7 @@ impl SceneBuffers {
             refs.push(PrimitiveKind::Ellipsoid.reference(k));
         }
         let bvh = Bvh::build(&bounds);
-        let prim_refs = if self.spheres.is_empty() && self.ellipsoids.is_empty() {
+        let prim_refs = if self.triangles_alone() {
             // Triangles alone: the kernel reads them in leaf order directly (see `leaf_slot`).
             Vec::new()
         } else {

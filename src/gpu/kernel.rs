@@ -66,6 +66,10 @@ pub struct KernelConfig {
 /// costs lavapipe 0.1 to 2 s (docs/performance.md, "Compiles").
 pub const SHARED_KERNEL_MAX_SAMPLES: u64 = 512 * 512;
 
+/// A kernel as the renderer's cache of pipelines names it: its configuration and the mask of
+/// its bindings.
+pub(super) type KernelKey = (KernelConfig, u32);
+
 /// The kernel's passes: one pass for a pixel's centre sample, or, with sampling
 /// (docs/SPEC.md §8), a pass tracing every sample and a pass filtering them.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]

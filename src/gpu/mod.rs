@@ -15,7 +15,8 @@
 //! its tiles in flight, a tile's dispatch, what the host reads back); `handover` (pixels
 //! given to the reference); `prepared` (a scene made ready) and `tile_loop` (its tiles
 //! rendered, on a thread of ours or awaited in a browser); `present` (its tiles drawn onto
-//! a texture on the device, for the live window).
+//! a texture on the device, for the live window); `first_dispatch` and `ahead` (a batch's
+//! next kernels compiled ahead, on lavapipe on twin devices).
 
 mod ahead;
 mod bindings;
@@ -23,6 +24,7 @@ pub mod binning;
 mod dispatch;
 mod error;
 pub mod finite;
+mod first_dispatch;
 pub mod flatten;
 pub mod fuse;
 mod handover;

@@ -11,11 +11,11 @@ use super::binning::Bins;
 use super::dispatch::Dispatch;
 use super::error::GpuError;
 use super::flatten::{self, GridChoice, SceneBuffers};
-use super::kernel::KernelConfig;
+use super::kernel::{KernelConfig, KernelKey};
 use super::layout::{GpuTexture, Params, PixelLayout, SWITCH_ORTHOGRAPHIC, SWITCH_SHADE_BACK, SWITCH_TRIANGLES_ALONE};
 use super::parallel::in_parallel;
 use super::readback::Counters;
-use super::renderer::{Compiled, GpuRenderer, KernelKey};
+use super::renderer::{Compiled, GpuRenderer};
 use super::tiles::{SlotSizes, TileBuffers, TileSlot, Tiling};
 use super::upload::{upload_inputs, Inputs};
 use super::{precision, texture_range, unsupported, voxels};
@@ -34,7 +34,7 @@ pub struct PreparedScene<'a> {
     pub(super) fallback: Option<Scene>,
     /// The kernel's `-stats` counts, shared by every tile (bound to every slot).
     pub(super) counters: Counters,
-    /// The kernel the tiles dispatch first ([`super::ahead`], which a browser does without).
+    /// The kernel the tiles dispatch first (`gpu::ahead`, which a browser does without).
     #[cfg_attr(target_arch = "wasm32", allow(dead_code))]
     pub(super) first_kernel: KernelKey,
 }
@@ -49,7 +49,7 @@ impl GpuRenderer {
     }
 
     /// [`GpuRenderer::precompile`], naming the kernel a render dispatches first
-    /// ([`super::ahead`]).
+    /// (`gpu::ahead`).
     pub(super) fn precompile_first(
         &self,
         scene: &Scene,
@@ -97,7 +97,7 @@ impl<'a> PreparedScene<'a> {
         let compiled = unplanned.unwrap_or(compiled)?;
         let first_kernel = compiled.first;
         // Where the driver compiles at the first dispatch, a kernel a batch's twin device is
-        // compiling is waited for: Mesa's cache then hands it over (super::ahead).
+        // compiling is waited for: Mesa's cache then hands it over (gpu::ahead).
         if let Some(first_dispatches) = &gpu.first_dispatches {
             first_dispatches.wait_or_claim(first_kernel);
         }
@@ -126,15 +126,10 @@ impl<'a> PreparedScene<'a> {
 
 /// `Params::switches`: what a shared kernel reads instead of compiling it in.
 fn switches(buffers: &SceneBuffers, shade_back: bool) -> u32 {
-    let triangles_alone = buffers.spheres.is_empty() && buffers.ellipsoids.is_empty();
-    [
-        (buffers.orthographic, SWITCH_ORTHOGRAPHIC),
-        (shade_back, SWITCH_SHADE_BACK),
-        (triangles_alone, SWITCH_TRIANGLES_ALONE),
-    ]
-    .iter()
-    .filter(|(on, _)| *on)
-    .fold(0, |switches, (_, bit)| switches | bit)
+    let bit = |on: bool, bit: u32| if on { bit } else { 0 };
+    bit(buffers.orthographic, SWITCH_ORTHOGRAPHIC)
+        | bit(shade_back, SWITCH_SHADE_BACK)
+        | bit(buffers.triangles_alone(), SWITCH_TRIANGLES_ALONE)
 }
 
 /// A render checked, planned and flattened, and the kernel of its plan: what

@@ -1,10 +1,10 @@
 //! The renderer: a wgpu device opened as the kernel needs it, what the adapter allows, and
 //! the kernels compiled on it (cached by their configuration and bindings).
 
-use super::ahead::FirstDispatches;
 use super::bindings::{self, Binding, BindingSet};
 use super::error::GpuError;
-use super::kernel::{KernelConfig, Stage};
+use super::first_dispatch::{self, FirstDispatches};
+use super::kernel::{KernelConfig, KernelKey, Stage};
 use super::options::GpuOptions;
 use super::pipeline_cache::PipelineCache;
 use super::unsupported::UnsupportedError;
@@ -16,9 +16,6 @@ use std::sync::{Arc, Mutex, OnceLock};
 
 /// Kernels a renderer keeps compiled (see [`GpuRenderer::pipeline`]).
 const MAX_CACHED_PIPELINES: usize = 32;
-
-/// A kernel as the pipelines' cache names it: its configuration and its bindings' mask.
-pub(super) type KernelKey = (KernelConfig, u32);
 
 /// A wgpu device with the ray-casting kernel, ready to render scenes.
 pub struct GpuRenderer {
@@ -43,10 +40,10 @@ pub struct GpuRenderer {
     pub(super) options: GpuOptions,
     pub(super) timestamps: bool,
     /// The adapter the device was opened on, where this renderer opened it: a twin device
-    /// ([`super::ahead`]) opens on it too.
+    /// (`gpu::ahead`) opens on it too.
     pub(super) adapter: Option<wgpu::Adapter>,
     /// Where the driver compiles a kernel at its first dispatch: the kernels dispatched
-    /// once, here or on a twin device ([`super::ahead`]); shared with the renderers on this
+    /// once, here or on a twin device (`gpu::ahead`); shared with the renderers on this
     /// device. `None` elsewhere, and on a twin itself.
     pub(super) first_dispatches: Option<Arc<FirstDispatches>>,
 }
@@ -92,7 +89,9 @@ impl GpuRenderer {
     /// that chose the adapter, such as one that presents to a window).
     pub async fn on_adapter(adapter: &wgpu::Adapter, options: GpuOptions) -> Result<GpuRenderer, GpuError> {
         let mut gpu = Self::open_device(adapter, options).await?;
-        if super::ahead::compiles_at_first_dispatch(&gpu.adapter_info) {
+        // lavapipe compiles a kernel at its first dispatch, into Mesa's cache, which the
+        // process's devices share where it is on (gpu::ahead's twin devices).
+        if is_lavapipe(&gpu.adapter_info) && first_dispatch::mesa_disk_cache_on() {
             gpu.first_dispatches = Some(Arc::new(FirstDispatches::open(&gpu.adapter_info)));
         }
         Ok(gpu)
@@ -137,7 +136,7 @@ impl GpuRenderer {
     }
 
     /// A second device on this renderer's adapter, opened as this one was, for compiling
-    /// kernels ahead ([`super::ahead`]): it keeps no pipeline cache file of its own and
+    /// kernels ahead (`gpu::ahead`): it keeps no pipeline cache file of its own and
     /// shares no first dispatches. `None` where this renderer did not open its device.
     #[cfg(not(target_arch = "wasm32"))]
     pub(super) fn twin(&self) -> Option<Result<GpuRenderer, GpuError>> {
@@ -343,7 +342,7 @@ pub(super) struct Sampled {
 /// samples and filter kernels of one with it.
 pub(super) struct Compiled {
     /// The kernel a render dispatches first (its pixels kernel, or its samples kernel) and
-    /// its bindings: what [`super::ahead`] compiles by dispatching it.
+    /// its bindings: what `gpu::ahead` compiles by dispatching it.
     pub first: KernelKey,
     pub bindings: BindingSet,
     pub pipeline: Option<wgpu::ComputePipeline>,
