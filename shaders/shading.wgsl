@@ -172,10 +172,10 @@ fn start_blend(material: u32) {
     blend_len = 1u;
 }
 
-// The blend's next Phong material at the camera-relative point p, as the reference walks
-// it (cpu::Reference::shade_material): the first material before the second, and a
-// material with no share not at all.
-fn next_leaf(p: vec3<f32>) -> Leaf {
+// The blend's next Phong material at the camera-relative point p, met by a ray at `cosine`
+// to the surface, as the reference walks it (cpu::Reference::shade_material): the first
+// material before the second, and a material with no share not at all.
+fn next_leaf(p: vec3<f32>, cosine: f32) -> Leaf {
     while (blend_len > 0u) {
         blend_len -= 1u;
         let m = blend_material[blend_len];
@@ -184,7 +184,7 @@ fn next_leaf(p: vec3<f32>) -> Leaf {
         if (t.kind == 0u) {
             return Leaf(m, share);
         }
-        let first = first_material_share(t, p);
+        let first = first_material_share(t, p, cosine);
         if (first < 1.0) {
             blend_material[blend_len] = t.second;
             blend_share[blend_len] = share * (1.0 - first);
@@ -199,13 +199,20 @@ fn next_leaf(p: vec3<f32>) -> Leaf {
     return Leaf(NO_LEAF, 0.0);
 }
 
+// |cos| of the angle at which `ray` meets the surface: the hit's error along the surface
+// grows as it falls (check_reach).
+fn cosine_to(surface: Surface, ray: Ray) -> f32 {
+    return abs(dot3(surface.normal, ray.direction));
+}
+
 // The texture at the surface's material as the reference blends it: each Phong material
 // it reaches, shaded and weighted by its share.
 fn shade_blend(surface: Surface, n: vec3<f32>, ray: Ray) -> vec3<f32> {
     var color = vec3<f32>(0.0);
     start_blend(surface.material);
+    let cosine = cosine_to(surface, ray);
     loop {
-        let leaf = next_leaf(surface.point);
+        let leaf = next_leaf(surface.point, cosine);
         if (leaf.material == NO_LEAF) {
             break;
         }

@@ -77,24 +77,28 @@ var<private> shading_secondary_ray: bool;
 // Q = max_i Σ_j |M_ij|·|p_j| + |t_i|, the magnitude that bounds the rounding of q = M·p
 // (gpu::texture_range's contract), compared with what the texture tolerates. A bounded
 // primitive's points the host checks before the render; a plane's reach the horizon, so
-// every hit is checked here too. A reflected or refracted ray's hit carries the errors of
-// its whole path, which a curved mirror or glass magnifies: a smooth texture's share moves
-// with them continuously, but the checkerboard's parity flips, so the kernel leaves a
-// checkerboard seen that way to the reference (scene6_14 at 100²: 12 of 10 000 pixels more
-// than one level off otherwise).
-fn check_reach(t: Texture, p: vec3<f32>) {
+// every hit is checked here too. The hit itself is off by a few ulps of its magnitudes,
+// which a ray meeting the surface at `cosine` stretches along it by 1/cosine: at a grazing
+// ray the reach shrinks by that factor (a wood-grained plane seen 7 500 units away at a
+// cosine of 10⁻³ was 13 levels off otherwise). A reflected or refracted ray's hit carries
+// the errors of its whole path, which a curved mirror or glass magnifies: a smooth
+// texture's share moves with them continuously, but the checkerboard's parity flips, so
+// the kernel leaves a checkerboard seen that way to the reference (scene6_14 at 100²: 12 of
+// 10 000 pixels more than one level off otherwise).
+fn check_reach(t: Texture, p: vec3<f32>, cosine: f32) {
     let a = abs(p);
     let q = max(max(dot3(abs(t.row0.xyz), a) + abs(t.row0.w), dot3(abs(t.row1.xyz), a) + abs(t.row1.w)),
                 dot3(abs(t.row2.xyz), a) + abs(t.row2.w));
-    // `!(q <= reach)`: a NaN coordinate is beyond reach too.
-    if (!(q <= t.reach) || (shading_secondary_ray && t.kind == 1u)) {
+    // `!(q <= ...)`: a NaN coordinate is beyond reach too.
+    if (!(q <= t.reach * cosine) || (shading_secondary_ray && t.kind == 1u)) {
         beyond_texture_reach = true;
     }
 }
 
-// The share of the texture's first material at the camera-relative point p.
-fn first_material_share(t: Texture, p: vec3<f32>) -> f32 {
-    check_reach(t, p);
+// The share of the texture's first material at the camera-relative point p, met by a ray
+// at `cosine` to the surface.
+fn first_material_share(t: Texture, p: vec3<f32>, cosine: f32) -> f32 {
+    check_reach(t, p, cosine);
     let h = vec4<f32>(p, 1.0);
     // Rounded products (shaders/exact.wgsl): which checkerboard cell a point lies in is a
     // decision, the same on every driver.

@@ -79,8 +79,9 @@ fn push_children(surface: Surface, node: Pending) {
             return;
         }
         start_blend(surface.material);
+        let cosine = cosine_to(surface, node.ray);
         loop {
-            let leaf = next_leaf(surface.point);
+            let leaf = next_leaf(surface.point, cosine);
             if (leaf.material == NO_LEAF) {
                 break;
             }

@@ -30,7 +30,13 @@
 //! - during the render, for every point the kernel blends (`check_reach` in
 //!   `shaders/texture.wgsl`): a plane reaches the horizon, and reflected and refracted
 //!   rays meet it anywhere, so its hits are checked one by one, and a pixel with a point
-//!   beyond reach is handed over to the reference ([`super::layout::Handover`]).
+//!   beyond reach is handed over to the reference ([`super::layout::Handover`]). The hit
+//!   point itself is off by a few ulps of its magnitudes (the f32 ray's direction, the
+//!   division that finds t), and a ray meeting the surface at a cosine c stretches that
+//!   along the surface by 1/c, so the kernel holds `Q ≤ c · reach` there: `p` is no
+//!   better placed than `2⁻²² · |p| / c`. Observed at a plane met at c ≈ 10⁻³, the
+//!   depth was off by 2⁻¹⁵·⁵ of itself, about 2⁻²⁵ / c: within this bound by about 10.
+//!   Before the render a bounded primitive's box is checked at c = 1.
 
 use super::precision_error::{show, Limit, PrecisionError};
 use crate::render::RenderOptions;
