@@ -2,7 +2,8 @@
 //! texels hold, byte for byte, what the window draws from the host for the same view (the
 //! float frame quantised by `image_io`, each pixel repeated `scale × scale` times, opaque),
 //! in either byte order a surface takes, with the image in one tile or many, through copies
-//! or mapped buffers; and a frame with a pixel handed over to the reference says so.
+//! or mapped buffers; the depth over a `-depth` range or over the frame's own hits; and a
+//! frame with a pixel handed over to the reference says so.
 
 mod common;
 
@@ -45,6 +46,8 @@ enum View {
     Color,
     Normals,
     Depth(f32, f32),
+    /// The depth without a range: between the frame's nearest and farthest hits.
+    DepthOfHits,
 }
 
 impl View {
@@ -52,7 +55,7 @@ impl View {
         match self {
             View::Color => Output::Color,
             View::Normals => Output::Normals,
-            View::Depth(..) => Output::Depth,
+            View::Depth(..) | View::DepthOfHits => Output::Depth,
         }
     }
 }
@@ -74,6 +77,10 @@ fn drawn_from_host(
         View::Color => image_io::color_image(&frame),
         View::Normals => image_io::normals_image(&frame),
         View::Depth(min, max) => image_io::depth_image(&frame, min, max),
+        View::DepthOfHits => {
+            let (min, max) = image_io::hit_depth_range(std::slice::from_ref(&frame));
+            image_io::depth_image(&frame, min, max)
+        }
     };
     let mut texels = Vec::with_capacity(4 * (width * height) as usize);
     for y in 0..height {
@@ -111,7 +118,8 @@ fn compare_render(
         let prepared = gpu.prepare(&scene, options, true).expect("the GPU prepares the scene");
         let presenter = Presenter::new(gpu);
         let presented = match view {
-            View::Depth(min, max) => prepared.present_depth(&presenter, &texture, scale, (min, max)),
+            View::Depth(min, max) => prepared.present_depth(&presenter, &texture, scale, Some((min, max))),
+            View::DepthOfHits => prepared.present_depth(&presenter, &texture, scale, None),
             View::Color | View::Normals => prepared.present(&presenter, &texture, scale),
         };
         assert_eq!(
@@ -170,6 +178,43 @@ fn the_depth_drawn_on_the_device_is_the_one_drawn_from_the_host() {
         assert!(levels.len() > 10 && levels.contains(&0) && levels.contains(&255), "{scene}: levels {levels:?}");
         compare(gpu, scene, View::Depth(range.0, range.1), size, scale, target);
     }
+}
+
+/// Without a `-depth` range the device gathers the frame's nearest and farthest hit itself
+/// and draws what the host draws over the range it finds by folding the float frame's hits
+/// (`image_io::hit_depth_range`): white at the nearest, black at the farthest and at misses;
+/// over many tiles, whose hits are gathered across them; a frame that misses everything
+/// is black.
+#[test]
+fn the_depth_over_the_frames_own_hits_is_the_one_drawn_from_the_host() {
+    let Some(gpu) = common::gpu() else { return };
+    for (scene, size, scale, target) in [
+        ("plane_and_sphere_perspective.txt", (64, 48), 1, (64, 48)),
+        ("mesh_octahedron.txt", (30, 20), 3, (89, 59)),
+        ("three_lights.txt", (40, 30), 2, (80, 59)),
+    ] {
+        let loaded = load_scene(&common::scenes_dir().join(scene)).expect("the scene loads");
+        let options = RenderOptions { outputs: Outputs::from(Output::Depth), ..RenderOptions::all(size.0, size.1) };
+        let frame = gpu.render(&loaded, &options).expect("the GPU renders the scene");
+        let (min, max) = image_io::hit_depth_range(std::slice::from_ref(&frame));
+        let levels: std::collections::BTreeSet<u8> =
+            image_io::depth_image(&frame, min, max).pixels().map(|p| p.0[0]).collect();
+        assert!(levels.contains(&255) && levels.len() > 10, "{scene}: the nearest hit is white: {levels:?}");
+        compare(gpu, scene, View::DepthOfHits, size, scale, target);
+    }
+    // Tiles of one row each: the nearest and farthest hits lie in different tiles.
+    let small = gpu.on_same_device(GpuOptions { max_tile_bytes: 400, mapped_buffers: false, ..GpuOptions::default() });
+    compare(&small, "plane_and_sphere_perspective.txt", View::DepthOfHits, (100, 60), 1, (100, 60));
+    // A camera turned away from everything: no hit, a black frame.
+    let away = "PerspectiveCamera { center 0 0 10 direction 0 0 1 up 0 1 0 angle 30 }
+        Background { color 0.5 0.5 0.5 } Materials { numMaterials 1 Material { diffuseColor 1 0 0 } }
+        Group { numObjects 1 MaterialIndex 0 Sphere { center 0 0 0 radius 1 } }";
+    let scene = raycaster::scene::parse_scene(away, std::path::Path::new("away.txt")).expect("the scene parses");
+    let options = RenderOptions { outputs: Outputs::from(Output::Depth), ..RenderOptions::all(16, 8) };
+    let texture = common::texture(gpu, (16, 8), wgpu::TextureFormat::Rgba8Unorm);
+    let prepared = gpu.prepare(&scene, &options, true).expect("the GPU prepares the scene");
+    assert_eq!(prepared.present_depth(&Presenter::new(gpu), &texture, 1, None).unwrap(), Presented::Drawn);
+    assert!(read_texture(gpu, &texture).chunks_exact(4).all(|t| t == [0, 0, 0, 255]), "a frame of misses is black");
 }
 
 #[test]

@@ -25,8 +25,10 @@ struct Enlarge {
     row_texels: u32,
     // 1 where the target's bytes are blue, green, red, alpha; 0 for red, green, blue, alpha.
     bgra: u32,
-    // 1 where the first word is a depth's t (its bits; all ones where nothing was hit),
-    // shown in grey; 0 where it is a packed colour or |N|.
+    // What the first word is, and what the pass makes of it: 0 a packed colour or |N|;
+    // 1 a depth's t (its bits; all ones where nothing was hit), shown in grey; 2 a depth
+    // kept as its bits while the frame's hits are gathered into `hit_range` (without a
+    // `-depth` range), for `grey` to show once the host has the range.
     depth: u32,
 }
 
@@ -39,6 +41,8 @@ struct Enlarge {
 // For a depth: depth_bounds[k] is the largest ordered key (below) whose grey level is at
 // least k (gpu::present::depth_bounds); [0] holds every key.
 @group(0) @binding(4) var<storage, read> depth_bounds: array<u32, 256>;
+// The ordered keys of the frame's nearest and farthest hit (depth 2).
+@group(0) @binding(5) var<storage, read_write> hit_range: array<atomic<u32>, 2>;
 
 // A float's bits as a key that orders floats as unsigned integers: the sign bit flipped for
 // positive numbers, every bit for negative ones (gpu::ordered::ordered_key).
@@ -72,6 +76,19 @@ fn texel_of(rgb: u32) -> u32 {
     return bytes | 0xff000000u;
 }
 
+// The block of rendered pixel (x, image row y) in the target, cut at its edges.
+fn fill_block(x: u32, y: u32, texel: u32) {
+    let x0 = x * E.scale;
+    let y0 = y * E.scale;
+    let x1 = min(x0 + E.scale, E.target_width);
+    let y1 = min(y0 + E.scale, E.target_height);
+    for (var row = y0; row < y1; row++) {
+        for (var column = x0; column < x1; column++) {
+            texels[row * E.row_texels + column] = texel;
+        }
+    }
+}
+
 // One invocation per pixel of the tile, writing its block: no division, which a CPU
 // driver's vector units do lane by lane (a pass with an invocation per texel, dividing
 // its coordinates by the scale, took lavapipe twice as long at a scale of 3).
@@ -82,22 +99,35 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let pixel = (id.y * E.width + id.x) * E.stride;
     let first = pixels[pixel];
-    if (first == CUT_SHORT_WORD || first == BEYOND_REACH_WORD) {
+    let handed = first == CUT_SHORT_WORD || first == BEYOND_REACH_WORD;
+    if (handed) {
         atomicOr(&handed_over, 1u);
     }
+    // Conditions every invocation shares: a CPU driver's lanes take the branches together.
+    if (E.depth == 2u) {
+        if (first != 0xffffffffu && !handed) {
+            let key = ordered_key(first);
+            atomicMin(&hit_range[0], key);
+            atomicMax(&hit_range[1], key);
+        }
+        fill_block(id.x, E.first_row + id.y, first);
+        return;
+    }
     var rgb = first;
-    // A condition every invocation shares: a CPU driver's lanes skip the search together.
     if (E.depth != 0u) {
         rgb = depth_rgb(first);
     }
-    let texel = texel_of(rgb);
-    let x0 = id.x * E.scale;
-    let y0 = (E.first_row + id.y) * E.scale;
-    let x1 = min(x0 + E.scale, E.target_width);
-    let y1 = min(y0 + E.scale, E.target_height);
-    for (var y = y0; y < y1; y++) {
-        for (var x = x0; x < x1; x++) {
-            texels[y * E.row_texels + x] = texel;
-        }
+    fill_block(id.x, E.first_row + id.y, texel_of(rgb));
+}
+
+// The depths kept by `main` (depth 2) turned grey once the host has written the bounds of
+// the frame's range: one invocation per rendered pixel (`width` × `rows` of them, from
+// the top), reading its block's first texel and writing the block.
+@compute @workgroup_size(16, 16)
+fn grey(@builtin(global_invocation_id) id: vec3<u32>) {
+    if (id.x >= E.width || id.y >= E.rows || id.x * E.scale >= E.target_width) {
+        return;
     }
+    let bits = texels[id.y * E.scale * E.row_texels + id.x * E.scale];
+    fill_block(id.x, id.y, texel_of(depth_rgb(bits)));
 }

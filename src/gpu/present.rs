@@ -7,7 +7,11 @@
 //! its grey level (`image_io::depth_level`, computed in f64) is looked up among 255 bounds
 //! the host computes for the `-depth` range ([`depth_bounds`]), compared as ordered integers
 //! ([`super::ordered`]):
-//! the device does no float arithmetic, so every driver draws the host's levels.
+//! the device does no float arithmetic, so every driver draws the host's levels. Without a
+//! `-depth` range the view spans the frame's own hits (`image_io::depth_view_range`): the
+//! pass keeps each depth's bits in the texels while it gathers the nearest and farthest hit
+//! (atomic minimum and maximum of their ordered keys), the host reads those two words back
+//! and computes the bounds, and a second pass turns the texels grey.
 
 use super::error::GpuError;
 use super::layout::{BEYOND_REACH_WORD, CUT_SHORT_WORD};
@@ -23,11 +27,16 @@ use wgpu::util::DeviceExt;
 /// a time.
 pub struct Presenter {
     pipeline: wgpu::ComputePipeline,
+    /// `grey`: the depths `pipeline` kept as bits, shown once the range is known.
+    grey: wgpu::ComputePipeline,
     /// The enlarged frame's texels, kept while frames keep their size.
     texels: std::sync::Mutex<Option<(u64, wgpu::Buffer)>>,
-    /// Whether a pixel was handed over (`handed_over` in the shader), and its copy for the host.
+    /// Whether a pixel was handed over (`handed_over` in the shader), and its copy for the
+    /// host, followed there by `hit_range`'s.
     flag: wgpu::Buffer,
     flag_read: wgpu::Buffer,
+    /// The ordered keys of the nearest and farthest hit (`hit_range` in the shader).
+    hit_range: wgpu::Buffer,
     /// The depth's grey levels' bounds ([`depth_bounds`]; `depth_bounds` in the shader).
     bounds: wgpu::Buffer,
 }
@@ -81,23 +90,27 @@ impl Presenter {
             label: Some("enlarge"),
             source: wgpu::ShaderSource::Wgsl(enlarge_source().into()),
         });
-        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("enlarge"),
-            layout: None,
-            module: &module,
-            entry_point: Some("main"),
-            compilation_options: Default::default(),
-            cache: None,
-        });
+        let pipeline = |entry_point| {
+            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(entry_point),
+                layout: None,
+                module: &module,
+                entry_point: Some(entry_point),
+                compilation_options: Default::default(),
+                cache: None,
+            })
+        };
         use wgpu::BufferUsages as U;
         let buffer = |label, size, usage| {
             device.create_buffer(&wgpu::BufferDescriptor { label: Some(label), size, usage, mapped_at_creation: false })
         };
         Presenter {
-            pipeline,
+            pipeline: pipeline("main"),
+            grey: pipeline("grey"),
             texels: std::sync::Mutex::new(None),
             flag: buffer("handed_over", 4, U::STORAGE | U::COPY_SRC | U::COPY_DST),
-            flag_read: buffer("handed_over_read", 4, U::MAP_READ | U::COPY_DST),
+            flag_read: buffer("handed_over_read", 12, U::MAP_READ | U::COPY_DST),
+            hit_range: buffer("hit_range", 8, U::STORAGE | U::COPY_SRC | U::COPY_DST),
             bounds: buffer("depth_bounds", 4 * 256, U::STORAGE | U::COPY_DST),
         }
     }
@@ -171,33 +184,40 @@ impl PreparedScene<'_> {
         // The words come in the order colour, normals, depth (super::layout::PixelLayout).
         let shown = outputs.contains(Output::Color) || outputs.contains(Output::Normals);
         assert!(shown, "present draws colour or normals");
-        self.draw(presenter, target, scale, false)
+        self.draw(presenter, target, scale, Shown::Rgb)
     }
 
     /// [`PreparedScene::present`] for a render of the depth alone, shown as `-depth MIN MAX`
     /// shows it (`image_io::depth_image`): grey levels from `min` (white) to `max` (black),
-    /// black where nothing was hit. `min < max`, both finite.
+    /// black where nothing was hit. `min < max`, both finite; without a range, the frame's
+    /// own nearest and farthest hits (`image_io::depth_view_range`), as the live window
+    /// shows the depth when the command line gives none.
     pub fn present_depth(
         &self,
         presenter: &Presenter,
         target: &wgpu::Texture,
         scale: u32,
-        (min, max): (f32, f32),
+        range: Option<(f32, f32)>,
     ) -> Result<Presented, GpuError> {
         let (outputs, packed) = (self.dispatch.options.outputs, self.dispatch.layout.packed);
         assert!(packed && outputs == Output::Depth.into(), "present_depth draws a packed render of the depth alone");
         let gpu = self.dispatch.gpu;
-        gpu.queue.write_buffer(&presenter.bounds, 0, bytemuck::cast_slice(&depth_bounds(min, max)));
-        self.draw(presenter, target, scale, true)
+        match range {
+            Some((min, max)) => {
+                gpu.queue.write_buffer(&presenter.bounds, 0, bytemuck::cast_slice(&depth_bounds(min, max)));
+                self.draw(presenter, target, scale, Shown::Grey)
+            }
+            None => self.draw(presenter, target, scale, Shown::DepthOfHits),
+        }
     }
 
-    /// Draws the render's first word of each pixel: an 8-bit colour, or a depth (`depth`).
+    /// Draws the render's first word of each pixel, as `shown` says.
     fn draw(
         &self,
         presenter: &Presenter,
         target: &wgpu::Texture,
         scale: u32,
-        depth: bool,
+        shown: Shown,
     ) -> Result<Presented, GpuError> {
         let d = &self.dispatch;
         let (gpu, options) = (d.gpu, &d.options);
@@ -222,11 +242,12 @@ impl PreparedScene<'_> {
             row_texels,
             bgra: bgra(target.format()).unwrap_or_else(|| panic!("present writes no {:?} texture", target.format()))
                 as u32,
-            depth: depth as u32,
+            depth: shown as u32,
             ..Enlarge::zeroed()
         };
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
         encoder.clear_buffer(&presenter.flag, 0, None);
+        gpu.queue.write_buffer(&presenter.hit_range, 0, bytemuck::cast_slice(&[u32::MAX, 0]));
         gpu.queue.submit([encoder.finish()]);
         // The image's rows some target row shows: a target cut above the image's last
         // block leaves that block's rows out.
@@ -234,6 +255,16 @@ impl PreparedScene<'_> {
         for (k, (first_row, rows)) in row_tiles(shown_rows, d.tile_rows).enumerate() {
             (uniform.first_row, uniform.rows) = (first_row, rows);
             self.enlarge_tile(presenter, &texels, k % d.slots.len(), &uniform);
+        }
+        if shown == Shown::DepthOfHits {
+            let (handed_over, nearest, farthest) = presenter.read_flag_and_hits(gpu)?;
+            if handed_over {
+                return Ok(Presented::HandedOver);
+            }
+            let (min, max) = crate::image_io::depth_view_range(nearest, farthest);
+            gpu.queue.write_buffer(&presenter.bounds, 0, bytemuck::cast_slice(&depth_bounds(min, max)));
+            (uniform.first_row, uniform.rows) = (0, shown_rows);
+            presenter.turn_grey(gpu, &texels, &uniform);
         }
         let handed_over = presenter.copy_onto(gpu, &texels, target, row_texels)?;
         Ok(if handed_over { Presented::HandedOver } else { Presented::Drawn })
@@ -249,17 +280,9 @@ impl PreparedScene<'_> {
             usage: wgpu::BufferUsages::UNIFORM,
         });
         let output = &self.dispatch.slots[slot].buffers.output;
-        let bound = [output, texels, &presenter.flag, &uniform_buffer, &presenter.bounds];
-        let entries: Vec<_> = bound
-            .iter()
-            .enumerate()
-            .map(|(i, b)| wgpu::BindGroupEntry { binding: i as u32, resource: b.as_entire_binding() })
-            .collect();
-        let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("enlarge"),
-            layout: &presenter.pipeline.get_bind_group_layout(0),
-            entries: &entries,
-        });
+        let bound = [output, texels, &presenter.flag, &uniform_buffer, &presenter.bounds, &presenter.hit_range];
+        let entries: Vec<(u32, &wgpu::Buffer)> = (0u32..).zip(bound).collect();
+        let group = bind_group(&gpu.device, &presenter.pipeline, &entries);
         self.dispatch.submit_tile_then(slot, uniform.first_row, uniform.rows, |encoder, _| {
             let mut pass = encoder.begin_compute_pass(&Default::default());
             pass.set_pipeline(&presenter.pipeline);
@@ -270,7 +293,81 @@ impl PreparedScene<'_> {
     }
 }
 
+/// What the pass makes of each pixel's first word (`Enlarge::depth`).
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Shown {
+    /// A packed colour or |N|, as it is.
+    Rgb = 0,
+    /// A depth, grey over the bounds already written.
+    Grey = 1,
+    /// A depth, kept as bits while the hits' range is gathered, then grey.
+    DepthOfHits = 2,
+}
+
+/// A bind group of `pipeline`'s group 0 with `buffers` at their bindings.
+fn bind_group(
+    device: &wgpu::Device,
+    pipeline: &wgpu::ComputePipeline,
+    buffers: &[(u32, &wgpu::Buffer)],
+) -> wgpu::BindGroup {
+    let entries: Vec<_> = buffers
+        .iter()
+        .map(|&(binding, buffer)| wgpu::BindGroupEntry { binding, resource: buffer.as_entire_binding() })
+        .collect();
+    device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("enlarge"),
+        layout: &pipeline.get_bind_group_layout(0),
+        entries: &entries,
+    })
+}
+
 impl Presenter {
+    /// Waits for the tiles' passes; returns whether a pixel was handed over, and the
+    /// frame's nearest and farthest hit (+∞ and −∞ where nothing was hit).
+    fn read_flag_and_hits(&self, gpu: &GpuRenderer) -> Result<(bool, f32, f32), GpuError> {
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        encoder.copy_buffer_to_buffer(&self.flag, 0, &self.flag_read, 0, 4);
+        encoder.copy_buffer_to_buffer(&self.hit_range, 0, &self.flag_read, 4, 8);
+        let submission = gpu.queue.submit([encoder.finish()]);
+        let slice = self.flag_read.slice(..);
+        map_and_wait(&gpu.device, &slice, submission)?;
+        let words: [u32; 3] = {
+            let view = slice.get_mapped_range().map_err(|e| GpuError::Readback(e.to_string()))?;
+            bytemuck::pod_read_unaligned(&view)
+        };
+        self.flag_read.unmap();
+        let [flag, nearest, farthest] = words;
+        // Keys of the initial words where no hit lowered or raised them.
+        let (nearest, farthest) = match nearest <= farthest {
+            true => (from_ordered_key(nearest), from_ordered_key(farthest)),
+            false => (f32::INFINITY, f32::NEG_INFINITY),
+        };
+        Ok((flag != 0, nearest, farthest))
+    }
+
+    /// Turns the depths kept in `texels` grey over the bounds written, one invocation per
+    /// rendered pixel `uniform` shows.
+    fn turn_grey(&self, gpu: &GpuRenderer, texels: &wgpu::Buffer, uniform: &Enlarge) {
+        let uniform_buffer = gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("grey"),
+            contents: bytemuck::bytes_of(uniform),
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        let group = bind_group(&gpu.device, &self.grey, &[(1, texels), (3, &uniform_buffer), (4, &self.bounds)]);
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        {
+            let mut pass = encoder.begin_compute_pass(&Default::default());
+            pass.set_pipeline(&self.grey);
+            pass.set_bind_group(0, &group, &[]);
+            pass.dispatch_workgroups(
+                uniform.width.div_ceil(ENLARGE_WORKGROUP),
+                uniform.rows.div_ceil(ENLARGE_WORKGROUP),
+                1,
+            );
+        }
+        gpu.queue.submit([encoder.finish()]);
+    }
+
     /// Copies the enlarged frame onto `target` and waits for it; returns whether a pixel
     /// was handed over.
     fn copy_onto(
@@ -372,7 +469,9 @@ mod tests {
         let host: Vec<(String, u32)> = host.iter().map(|&(n, o)| (n.to_string(), o as u32)).collect();
         assert_eq!(shader, host);
         assert!(std::mem::size_of::<Enlarge>() as u32 >= span, "the uniform holds the shader's struct");
-        let entry = module.entry_points.iter().find(|e| e.name == "main").expect("main");
-        assert_eq!(entry.workgroup_size, [ENLARGE_WORKGROUP, ENLARGE_WORKGROUP, 1]);
+        for name in ["main", "grey"] {
+            let entry = module.entry_points.iter().find(|e| e.name == name).expect("the pass's entry points");
+            assert_eq!(entry.workgroup_size, [ENLARGE_WORKGROUP, ENLARGE_WORKGROUP, 1], "{name}");
+        }
     }
 }

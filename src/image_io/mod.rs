@@ -49,6 +49,29 @@ pub fn depth_level(t: f32, min: f32, max: f32) -> u8 {
     quantize(v as f32)
 }
 
+/// The range the depth view shows without a `-depth` range (the live window's `d`): from
+/// the `nearest` to the `farthest` hit; half a unit either side of a depth every hit shares
+/// (at least an ulp, so that the range is never empty); `(0, 1)` where nothing was hit
+/// (`nearest` = +∞, `farthest` = −∞). Always `min < max`, both finite.
+pub fn depth_view_range(nearest: f32, farthest: f32) -> (f32, f32) {
+    if nearest < farthest {
+        (nearest, farthest)
+    } else if nearest.is_finite() {
+        // An ulp of t is at most |t| · 2⁻²³ (f32::EPSILON).
+        let half = 0.5f32.max(nearest.abs() * f32::EPSILON);
+        (nearest - half, nearest + half)
+    } else {
+        (0.0, 1.0)
+    }
+}
+
+/// [`depth_view_range`] over `frames`' hits.
+pub fn hit_depth_range(frames: &[Frame]) -> (f32, f32) {
+    let hits = frames.iter().flat_map(|f| f.depth.iter().zip(&f.hit).filter(|(_, &hit)| hit).map(|(&t, _)| t));
+    let (nearest, farthest) = hits.fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), t| (lo.min(t), hi.max(t)));
+    depth_view_range(nearest, farthest)
+}
+
 fn image_from(frame: &Frame, pixel: impl Fn(usize) -> [u8; 3]) -> RgbImage {
     let mut data = Vec::with_capacity(frame.hit.len() * 3);
     for k in 0..frame.hit.len() {
@@ -624,4 +647,29 @@ pub fn samples_picture(
         }
     }
     picture
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn depth_is_shown_between_the_nearest_and_farthest_hits() {
+        let frame = Frame {
+            width: 3,
+            height: 1,
+            hit: vec![true, false, true],
+            color: vec![],
+            normal: vec![],
+            depth: vec![2.0, 9.0, 5.0],
+        };
+        assert_eq!(hit_depth_range(&[frame]), (2.0, 5.0));
+        assert_eq!(hit_depth_range(&[]), (0.0, 1.0));
+        assert_eq!(depth_view_range(f32::INFINITY, f32::NEG_INFINITY), (0.0, 1.0));
+        assert_eq!(depth_view_range(3.0, 3.0), (2.5, 3.5));
+        // Where half a unit is below an ulp, the range still holds one either side.
+        let far = 3.0e9f32;
+        let (min, max) = depth_view_range(far, far);
+        assert!(min < far && far < max && max - min <= 4.0 * far * f32::EPSILON, "{min} {max}");
+    }
 }

@@ -20,7 +20,7 @@ use orbit::Orbit;
 use present::Screen;
 use raycaster::gpu::{GpuRenderer, Presented};
 use raycaster::image_io;
-use raycaster::render::{Frame, Output, Outputs, RenderOptions};
+use raycaster::render::{Output, Outputs, RenderOptions};
 use raycaster::renderer::Renderer;
 use raycaster::scene::Scene;
 use std::sync::Arc;
@@ -208,7 +208,7 @@ impl<'a> LiveView<'a> {
         let start = Instant::now();
         let options = view_options(self.args, self.output, (WARM_UP_SIDE, WARM_UP_SIDE));
         // The kernel the frames drawn on the device run (8-bit pixels), where they are.
-        let gpu = device_drawn(backend, &self.scene, self.args, &options);
+        let gpu = device_drawn(backend, &self.scene, &options);
         match gpu.and_then(|gpu| gpu.prepare(&self.scene, &options, true).ok()) {
             Some(prepared) => {
                 prepared.render(|_| Ok::<(), Failure>(()))?;
@@ -398,27 +398,20 @@ fn view_options(args: &RenderArgs, output: Output, (width, height): (u32, u32)) 
     options
 }
 
-/// The GPU that draws the render `options` on the device, where one does: colour and
-/// normals, whose 8-bit images the kernel computes whole, and the depth over the command
-/// line's `-depth` range (without one the range comes from the frame's hits, on the host),
-/// rendered by the GPU (`auto` may hand a scene to the reference).
-fn device_drawn<'r>(
-    backend: &'r Renderer,
-    scene: &Scene,
-    args: &RenderArgs,
-    options: &RenderOptions,
-) -> Option<&'r GpuRenderer> {
-    let shows_rgb = options.outputs.contains(Output::Color) || options.outputs.contains(Output::Normals);
-    let drawable = shows_rgb || args.files.depth_range().is_some();
+/// The GPU that draws the render `options` on the device, where the GPU renders it (`auto`
+/// may hand a scene to the reference): colour and normals as the kernel quantises them,
+/// the depth over the command line's `-depth` range or, without one, over the frame's own
+/// hits (`gpu::present`).
+fn device_drawn<'r>(backend: &'r Renderer, scene: &Scene, options: &RenderOptions) -> Option<&'r GpuRenderer> {
     let (renderer, _) = backend.for_scene(scene, options);
-    renderer.gpu().filter(|_| drawable)
+    renderer.gpu()
 }
 
 /// Renders the view at the frame's size divided by `scale` and draws it onto `frame` on the
-/// device, without the pixels crossing to the host; returns false where it cannot (see
-/// [`device_drawn`]; the GPU refuses the scene, which the host's path then reports or
-/// hands to the reference; or a pixel was handed over to the reference), for the caller
-/// to draw the frame from the host.
+/// device, without the pixels crossing to the host; returns false where it cannot (the
+/// reference renders the scene, [`device_drawn`]; the GPU refuses it, which the host's
+/// path then reports or hands to the reference; or a pixel was handed over to the
+/// reference), for the caller to draw the frame from the host.
 fn draw_on_device(
     screen: &Screen,
     backend: &Renderer,
@@ -430,10 +423,10 @@ fn draw_on_device(
 ) -> Result<bool, Failure> {
     let (width, height) = screen.size();
     let options = view_options(args, output, (width.div_ceil(scale), height.div_ceil(scale)));
-    let Some(gpu) = device_drawn(backend, scene, args, &options) else { return Ok(false) };
+    let Some(gpu) = device_drawn(backend, scene, &options) else { return Ok(false) };
     let Ok(prepared) = gpu.prepare(scene, &options, true) else { return Ok(false) };
-    let presented = match (output, args.files.depth_range()) {
-        (Output::Depth, Some(range)) => prepared.present_depth(screen.presenter(), &frame.texture, scale, range)?,
+    let presented = match output {
+        Output::Depth => prepared.present_depth(screen.presenter(), &frame.texture, scale, args.files.depth_range())?,
         _ => prepared.present(screen.presenter(), &frame.texture, scale)?,
     };
     Ok(presented == Presented::Drawn)
@@ -454,7 +447,7 @@ fn render_view(
         tiles.push(frame);
         Ok::<(), Failure>(())
     })?;
-    let (min, max) = args.files.depth_range().unwrap_or_else(|| hit_depths(&tiles));
+    let (min, max) = args.files.depth_range().unwrap_or_else(|| image_io::hit_depth_range(&tiles));
     Ok(tiles
         .iter()
         .flat_map(|tile| match output {
@@ -463,19 +456,6 @@ fn render_view(
             Output::Depth => image_io::depth_image(tile, min, max).into_raw(),
         })
         .collect())
-}
-
-/// The nearest and farthest hit, or `(0, 1)` where nothing was hit.
-fn hit_depths(tiles: &[Frame]) -> (f32, f32) {
-    let hits = tiles.iter().flat_map(|t| t.depth.iter().zip(&t.hit).filter(|(_, &hit)| hit).map(|(&d, _)| d));
-    let (min, max) = hits.fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), d| (lo.min(d), hi.max(d)));
-    if min < max {
-        (min, max)
-    } else if min.is_finite() {
-        (min - 0.5, min + 0.5)
-    } else {
-        (0.0, 1.0)
-    }
 }
 
 /// `rgb`, `width` pixels wide, enlarged onto an image of size `to`: each pixel a
@@ -549,19 +529,5 @@ mod tests {
         assert_eq!(moving_scale(Duration::from_millis(20)), 1);
         assert_eq!(moving_scale(Duration::from_millis(120)), 2);
         assert_eq!(moving_scale(Duration::from_millis(10_000)), 8);
-    }
-
-    #[test]
-    fn depth_is_shown_between_the_nearest_and_farthest_hits() {
-        let frame = Frame {
-            width: 3,
-            height: 1,
-            hit: vec![true, false, true],
-            color: vec![],
-            normal: vec![],
-            depth: vec![2.0, 9.0, 5.0],
-        };
-        assert_eq!(hit_depths(&[frame]), (2.0, 5.0));
-        assert_eq!(hit_depths(&[]), (0.0, 1.0));
     }
 }
