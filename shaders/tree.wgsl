@@ -55,12 +55,14 @@ fn push_ray(ray: Ray, tint: vec3<f32>, share: f32, parent: Pending, index: f32) 
 
 // The direction of the unit ray d refracted at a surface whose unit normal n faces it, from
 // index_from into index_to (Snell's law, as cpu::refract); w = 0 at total internal
-// reflection.
+// reflection. k = 1 − η²(1 − cos²) is computed as (1 − η)(1 + η) + η²cos² (docs/SPEC.md §5):
+// the first form rounds 1 − cos² to 1 below cos ≈ 2⁻¹², so a grazing ray between equal
+// indices (η = 1, k = cos²) was taken for total internal reflection.
 fn refraction(d: vec3<f32>, n: vec3<f32>, index_from: f32, index_to: f32) -> vec4<f32> {
     let eta = index_from / index_to;
     let cos_in = -dot3(d, n);
     // Whether the ray is reflected whole (k < 0) is a decision: products rounded.
-    let k = 1.0 - rounded(rounded(eta * eta) * (1.0 - rounded(cos_in * cos_in)));
+    let k = rounded((1.0 - eta) * (1.0 + eta)) + rounded(rounded(eta * eta) * rounded(cos_in * cos_in));
     if (k < 0.0) {
         return vec4<f32>(0.0);
     }

@@ -141,3 +141,35 @@ fn secondary_rays_walk_the_hierarchy() {
         assert_within_contract(&format!("{shading:?}"), &ours, &raycaster::cpu::render(&scene, &options));
     }
 }
+
+/// `tests/random_scenes.rs`, seed 6292329014124542240, shrunk: a mirror-glass plane of
+/// index 1 met 2·10⁵ units away at a cosine of about 10⁻⁵. Snell's `1 − η²(1 − cos²)`
+/// rounds `1 − cos²` to 1 in f32, so k was 0 and the refracted ray lost the component that
+/// takes it through the plane: 2 of 1 496 pixels up to 73 levels off the reference.
+#[test]
+fn a_ray_refracted_far_away_at_grazing_incidence_agrees_with_the_reference() {
+    let Some(gpu) = common::gpu() else { return };
+    let scene = parse_scene(
+        "PerspectiveCamera { center 5.803 -1.841 -5.833 direction -0.596 0.161 0.686
+           up -0.777 -0.706 0.454 angle 35.325 }
+         Lights { numLights 2
+           PointLight { position 3.253 -15.154 -13.771 color 0.836 0.787 0.463 attenuation 0 0.054 0 }
+           DirectionalLight { direction -0.805 0.073 -0.273 color 0.532 0.108 0.015 } }
+         Background { color 0.329 0.22 0.436 ambientLight 0.158 0.062 0.446 }
+         Materials { numMaterials 1
+           PhongMaterial { diffuseColor 0.08 0.908 0.627 specularColor 0.356 0.171 0.805 exponent 95.179
+             reflectiveColor 0.395 0.111 0.933 transparentColor 0.488 0.053 0.661 } }
+         Group { numObjects 2 MaterialIndex 0
+           Plane { normal -0.352 -0.703 -0.129 offset -1.514 }
+           Transform { Rotate { -0.15 -0.651 -0.204 137.71 } Sphere { center 2.448 -3.444 -1.241 radius 1.99 } } }",
+        Path::new("far_glass.txt"),
+    )
+    .expect("the scene parses");
+    let mut options = RenderOptions::all(88, 17);
+    options.shading = Shading { shadows: true, bounces: 3, weight: 0.02, ..options.shading };
+    let (ours, _) = common::render_gpu_tiles(gpu, &scene, &options);
+    let reference = raycaster::cpu::render(&scene, &options);
+    let errors = compare_frames(&ours, &reference, (0.0, 1.0));
+    let color = errors.iter().find(|e| e.output == Output::Color).expect("a colour image was asked for");
+    assert_eq!(color.image.off_by_more_than_one, 0, "{color:?}");
+}
