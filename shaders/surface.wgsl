@@ -65,11 +65,23 @@ const SPAWN_OFFSET: f32 = 1.9073486328125e-6;
 // Tracing Gems ch. 6) offset along the normal, by 2⁸ ulps per coordinate; an offset along
 // the normal moves the ray's line sideways, which grazing rays inside a transparent sphere
 // turned into 170 of 40 000 pixels off the reference in the course's scene4_07 (2⁸ ulps)
-// or 11 (2⁴), against 2 moved along d (2⁵). A ray leaving at less than 1/1024 to the
-// surface moves 1024 times the offset along itself.
+// or 11 (2⁴), against 2 moved along d (2⁵). A ray leaving at less than SPAWN_MIN_COSINE to
+// the surface moves 1024 times the offset along itself, which no longer clears the
+// point's error: a reflected or refracted ray leaving that way hands its pixel over
+// (leaves_grazing).
 fn spawn_origin(surface: Surface, side: vec3<f32>, d: vec3<f32>) -> vec3<f32> {
-    let away = max(dot3(d, side), 1.0 / 1024.0);
+    let away = max(dot3(d, side), SPAWN_MIN_COSINE);
     return along(surface.point, SPAWN_OFFSET * surface.scale / away, d);
+}
+
+// The cosine to the surface below which spawn_origin's move stops growing.
+const SPAWN_MIN_COSINE: f32 = 0.0009765625; // 1/1024
+
+// Whether a ray leaving the surface in direction d (unit, on the side of `side`) leaves it
+// at less than SPAWN_MIN_COSINE: its start may then lie within the point's error of the
+// surface, and find it again.
+fn leaves_grazing(side: vec3<f32>, d: vec3<f32>) -> bool {
+    return dot3(d, side) < SPAWN_MIN_COSINE;
 }
 
 // How far a ray from the surface's point along the unit direction d goes inside the closed

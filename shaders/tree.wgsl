@@ -42,13 +42,22 @@ fn pop_pending() -> Pending {
     return Pending(Ray(o.xyz, d.xyz), t.xyz, o.w, d.w, bitcast<u32>(t.w));
 }
 
+// Set where a reflected or refracted ray traced for the pixel left its surface grazing it
+// (leaves_grazing in shaders/surface.wgsl): the f32 kernel cannot start it faithfully, so
+// the pixel is handed over to the reference, as one beyond a texture's reach is.
+var<private> spawned_grazing: bool;
+
 // Queues a ray whose colour counts `share` · `tint` times: not at all where the tint is
 // black or the weight it would carry falls below -weight. The weight leaves the share out,
 // as the reference's path weight does (a texture's materials each spawn their own rays).
-fn push_ray(ray: Ray, tint: vec3<f32>, share: f32, parent: Pending, index: f32) {
+// `grazing`: the ray leaves its surface grazing it.
+fn push_ray(ray: Ray, tint: vec3<f32>, share: f32, parent: Pending, index: f32, grazing: bool) {
     let weight = parent.weight * length(tint);
     if (all(tint == vec3<f32>(0.0)) || weight < P.weight) {
         return;
+    }
+    if (grazing) {
+        spawned_grazing = true;
     }
     push_pending(Pending(ray, parent.throughput * (share * tint), weight, index, parent.bounces + 1u));
 }
@@ -104,10 +113,12 @@ fn push_material_children(surface: Surface, node: Pending, material: Material, s
     // Refraction first, so that reflection, which the reference adds first, is traced first.
     let refracted = refraction(d, n, node.index, index_to);
     if (refracted.w != 0.0) {
-        push_ray(Ray(spawn_origin(surface, -n, refracted.xyz), refracted.xyz), material.transparent, share, node, index_to);
+        let ray = Ray(spawn_origin(surface, -n, refracted.xyz), refracted.xyz);
+        push_ray(ray, material.transparent, share, node, index_to, leaves_grazing(-n, refracted.xyz));
     }
     let reflected = d - rounded3(2.0 * dot3(d, n) * n);
-    push_ray(Ray(spawn_origin(surface, n, reflected), reflected), material.reflective, share, node, node.index);
+    let ray = Ray(spawn_origin(surface, n, reflected), reflected);
+    push_ray(ray, material.reflective, share, node, node.index, leaves_grazing(n, reflected));
 }
 
 // The colour seen along a primary ray that hit `surface`: its own shading, then every ray of
@@ -148,7 +159,8 @@ fn color_of_tree(surface: Surface, ray: Ray) -> vec3<f32> {
 }
 
 // What a pixel shows, shaded and not yet written; `beyond_reach` where a solid texture
-// was blended beyond its reach on the way (shaders/texture.wgsl).
+// was blended beyond its reach on the way (shaders/texture.wgsl), or a reflected or
+// refracted ray left its surface grazing it (spawned_grazing).
 struct Shaded {
     hit: bool,
     color: vec3<f32>,
@@ -167,8 +179,10 @@ fn shade_pixel(ray: Ray, hit: Closest) -> Shaded {
         beyond_texture_reach = false;
         shading_secondary_ray = false;
     }
+    spawned_grazing = false;
     if (WANT_COLOR) {
         color = color_of_tree(surface, ray);
     }
-    return Shaded(true, color, surface.normal, hit.t, TEXTURES && beyond_texture_reach);
+    let beyond_reach = (TEXTURES && beyond_texture_reach) || (TREE && spawned_grazing);
+    return Shaded(true, color, surface.normal, hit.t, beyond_reach);
 }

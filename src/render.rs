@@ -160,8 +160,9 @@ pub struct RenderStats {
     /// ([`GpuRenderer::loop_limit`](crate::gpu::GpuRenderer::loop_limit)), which the reference
     /// rendered instead.
     pub pixels_cut_short: u64,
-    /// Pixels where a solid texture was blended beyond its reach
-    /// ([`crate::gpu::texture_range`]), which the reference rendered instead.
+    /// Pixels beyond the f32 kernel's reach, which the reference rendered instead: a solid
+    /// texture blended beyond its reach ([`crate::gpu::texture_range`]), or a reflected or
+    /// refracted ray leaving its surface at a cosine below 1/1024 (docs/SPEC.md §5).
     pub pixels_beyond_reach: u64,
     /// Time to flatten the scene into buffers (BVH build included) and upload them.
     pub prepare_ms: f64,

@@ -50,6 +50,24 @@ fn options(size: u32, shading: Shading) -> RenderOptions {
     RenderOptions { shading, ..RenderOptions::all(size, size) }
 }
 
+/// The 8-bit colour image the files hold, as the kernel packs it (hand-overs patched by
+/// the host), and the render's counts.
+fn packed_color(
+    gpu: &raycaster::gpu::GpuRenderer,
+    scene: &Scene,
+    options: &RenderOptions,
+) -> (Vec<u8>, raycaster::render::RenderStats) {
+    let prepared = gpu.prepare(scene, options, true).expect("the GPU prepares the scene");
+    let mut rgb = Vec::new();
+    let stats = prepared
+        .render(|tile| {
+            rgb.extend(tile.color_rgb());
+            Ok::<(), GpuError>(())
+        })
+        .expect("the GPU renders the scene");
+    (rgb, stats)
+}
+
 /// The colour image within the project's contract: at most one pixel in 1000 more than one
 /// level off the reference's.
 fn assert_within_contract(what: &str, ours: &Frame, reference: &Frame) {
@@ -82,14 +100,7 @@ fn pixels_past_the_loop_limit_are_rendered_by_the_reference() {
         assert_eq!(stats.pixels_cut_short, 0, "no loop limit, nothing cut short");
     }
     // The 8-bit path marks and patches packed words.
-    let prepared = gpu.prepare(&scene, &options, true).expect("the GPU prepares it");
-    let mut rgb = Vec::new();
-    let packed_stats = prepared
-        .render(|tile| {
-            rgb.extend(tile.color_rgb());
-            Ok::<(), GpuError>(())
-        })
-        .expect("the GPU renders it");
+    let (rgb, packed_stats) = packed_color(&gpu, &scene, &options);
     assert_eq!(packed_stats.pixels_cut_short, stats.pixels_cut_short);
     let expected = raycaster::image_io::color_image(&reference).into_raw();
     let off = rgb.chunks(3).zip(expected.chunks(3)).filter(|(a, b)| a.iter().zip(*b).any(|(x, y)| x.abs_diff(*y) > 1));
@@ -172,4 +183,45 @@ fn a_ray_refracted_far_away_at_grazing_incidence_agrees_with_the_reference() {
     let errors = compare_frames(&ours, &reference, (0.0, 1.0));
     let color = errors.iter().find(|e| e.output == Output::Color).expect("a colour image was asked for");
     assert_eq!(color.image.off_by_more_than_one, 0, "{color:?}");
+}
+
+/// A sheet of clear glass of index 1, tilted, with the camera one unit above it looking
+/// along it and down by 10⁻⁴: invisible, every pixel shows the background, through the
+/// sheet or past it. The middle row's rays meet the sheet 10⁴ units away at a cosine of
+/// 10⁻⁴, where a refracted ray's start, moved 1024 times the kernel's offset along itself,
+/// lies within the hit's own error of the sheet: it found the sheet again, from behind,
+/// and showed black (3 of its 15 pixels). The kernel hands such pixels to the reference.
+#[test]
+fn a_ray_leaving_glass_almost_along_it_goes_to_the_reference() {
+    let Some(gpu) = common::gpu() else { return };
+    let scene = parse_scene(
+        "PerspectiveCamera { center 0.303045763 -0.505076272 0.808122036
+           direction -0.000030305 0.848048812 0.529918128 up 0.303045763 -0.505076272 0.808122036 angle 30 }
+         Lights { numLights 0 }
+         Background { color 0.2 0.4 0.8 ambientLight 0 0 0 }
+         Materials { numMaterials 1
+           Material { diffuseColor 0 0 0 transparentColor 1 1 1 indexOfRefraction 1 } }
+         Group { numObjects 1 MaterialIndex 0 Plane { normal 0.3 -0.5 0.8 offset 0 } }",
+        Path::new("glass_sheet.txt"),
+    )
+    .expect("the scene parses");
+    let mut options = RenderOptions::all(15, 9);
+    options.shading.bounces = 2;
+    let background = [0.2f32, 0.4, 0.8].map(raycaster::image_io::quantize);
+    let (ours, stats) = common::render_gpu_tiles(gpu, &scene, &options);
+    let reference = raycaster::cpu::render(&scene, &options);
+    assert!(reference.hit.iter().filter(|&&h| h).count() >= 15 * 5, "the sheet fills the lower rows and the middle");
+    for (name, frame) in [("reference", &reference), ("gpu", &ours)] {
+        let off: Vec<usize> = (0..frame.color.len())
+            .filter(|&k| frame.color[k].map(raycaster::image_io::quantize) != background)
+            .collect();
+        assert!(off.is_empty(), "{name}: pixels {off:?} are not the background");
+    }
+    // The middle row, and no more: the rows below meet the sheet at cosines of 0.036 and up.
+    assert_eq!(stats.pixels_beyond_reach, 15, "the middle row is handed over");
+    // The 8-bit images the files hold, on every driver (not only where a loop limit makes
+    // the kernel hand pixels over already): no marker left in them.
+    let (rgb, stats) = packed_color(gpu, &scene, &options);
+    assert_eq!(stats.pixels_beyond_reach, 15, "packed: the middle row is handed over");
+    assert!(rgb.chunks_exact(3).all(|p| p == background), "packed: every pixel is the background");
 }

@@ -170,8 +170,9 @@ impl Report {
             }
             if stats.pixels_beyond_reach > 0 {
                 lines.push(format!(
-                    "texture reach: {} pixels see a solid texture beyond the f32 kernel's reach (far \
-                     away, or a checkerboard by a reflected or refracted ray); the reference rendered them",
+                    "f32 reach: {} pixels beyond the f32 kernel's reach (a solid texture far away, a \
+                     checkerboard seen by a reflected or refracted ray, or such a ray leaving its \
+                     surface almost along it); the reference rendered them",
                     stats.pixels_beyond_reach
                 ));
             }

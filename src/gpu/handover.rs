@@ -1,6 +1,7 @@
 //! Hand-over: the pixels the kernel marks for the reference (its driver cut their loops
-//! short, [`KernelConfig::loop_canary`](super::KernelConfig::loop_canary), or a texture was
-//! blended beyond its reach there, [`super::texture_range`]), rendered again by the f64
+//! short, [`KernelConfig::loop_canary`](super::KernelConfig::loop_canary); or beyond the f32
+//! kernel's reach: a texture blended beyond its reach there, [`super::texture_range`], or
+//! a reflected or refracted ray leaving its surface grazing it), rendered again by the f64
 //! reference before the caller sees the tile.
 
 use super::error::GpuError;
@@ -14,7 +15,7 @@ use std::cell::OnceCell;
 
 /// The references that render handed-over pixels again, each built once per band, when
 /// its first pixel comes (with `-grid`, building one builds the grid): one for the pixels
-/// cut short, whose counts `-stats` adds, one for those beyond a texture's reach.
+/// cut short, whose counts `-stats` adds, one for those beyond the kernel's reach.
 pub(super) struct RenderAgain<'s> {
     /// The scene, where the kernel may hand pixels over; `None` where it never does.
     scene: Option<&'s Scene>,

@@ -171,6 +171,14 @@ impl KernelConfig {
         }
     }
 
+    /// Whether the kernel may hand pixels over to the reference (`gpu::handover`): its
+    /// driver may cut loops short ([`KernelConfig::loop_canary`]), a solid texture may be
+    /// blended beyond its reach ([`super::texture_range`]), or a reflected or refracted ray
+    /// may leave its surface grazing it (`leaves_grazing` in shaders/surface.wgsl).
+    pub fn may_hand_over(&self) -> bool {
+        self.loop_canary || self.textures || self.tree
+    }
+
     /// Pixels each invocation renders, stacked in a column (the kernel's `PACKET` in
     /// `main_bins`): 4 rays share each load from a bin; `main` renders one pixel.
     pub fn packet(&self) -> u32 {

@@ -321,8 +321,9 @@ impl GpuLight {
 ///
 /// A pixel the kernel hands over is marked ([`Handover`]): whose loops the driver cut short
 /// (`LOOP_CANARY`), its hit word [`CUT_SHORT_HIT`] or its first packed word
-/// [`CUT_SHORT_WORD`]; where a solid texture was blended beyond its reach
-/// ([`super::texture_range`]), [`BEYOND_REACH_HIT`] or [`BEYOND_REACH_WORD`]. The host
+/// [`CUT_SHORT_WORD`]; beyond the f32 kernel's reach (a solid texture blended beyond its
+/// reach, [`super::texture_range`], or a reflected or refracted ray leaving its surface
+/// grazing it), [`BEYOND_REACH_HIT`] or [`BEYOND_REACH_WORD`]. The host
 /// renders it again with the reference ([`PixelLayout::encode`]) before anyone reads it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct PixelLayout {
@@ -375,10 +376,10 @@ pub const CUT_SHORT_HIT: u32 = 2;
 /// where it stands for a depth, which no t is. The pixel's other words are not read.
 pub const CUT_SHORT_WORD: u32 = 0xffff_fffe;
 
-/// The hit word of a float pixel where a texture was blended beyond its reach.
+/// The hit word of a float pixel beyond the kernel's reach ([`Handover::BeyondReach`]).
 pub const BEYOND_REACH_HIT: u32 = 3;
-/// The first packed word of a pixel where a texture was blended beyond its reach, chosen
-/// as [`CUT_SHORT_WORD`] is (another NaN).
+/// The first packed word of a pixel beyond the kernel's reach ([`Handover::BeyondReach`]),
+/// chosen as [`CUT_SHORT_WORD`] is (another NaN).
 pub const BEYOND_REACH_WORD: u32 = 0xffff_fffd;
 
 /// What a packed depth word holds where the ray hit nothing (a NaN no kernel computes).
@@ -389,7 +390,8 @@ pub const PACKED_MISS: u32 = u32::MAX;
 pub enum Handover {
     /// The driver cut the invocation's loops short (docs/lavapipe.md).
     LoopsCut,
-    /// A solid texture was blended where f32 does not place its points faithfully.
+    /// Beyond the f32 kernel's reach: a solid texture was blended where f32 does not place
+    /// its points faithfully, or a reflected or refracted ray left its surface grazing it.
     BeyondReach,
 }
 

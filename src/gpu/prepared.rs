@@ -28,9 +28,9 @@ pub struct PreparedScene<'a> {
     /// The kernels, the per-tile buffers and the frame's bins, which render the tiles.
     pub(super) dispatch: Dispatch<'a>,
     pub(super) stats: RenderStats,
-    /// The scene, kept where the kernel may hand pixels over (its driver cut them short,
-    /// [`KernelConfig::loop_canary`], or a texture was beyond its reach there,
-    /// [`super::texture_range`]), to render those with the reference ([`super::handover`]).
+    /// The scene, kept where the kernel may hand pixels over
+    /// ([`KernelConfig::may_hand_over`]), to render those with the reference
+    /// ([`super::handover`]).
     pub(super) fallback: Option<Scene>,
     /// The kernel's `-stats` counts, shared by every tile (bound to every slot).
     pub(super) counters: Counters,
@@ -117,7 +117,7 @@ impl<'a> PreparedScene<'a> {
         Ok(PreparedScene {
             dispatch,
             stats: RenderStats { prepare_ms: start.elapsed().as_secs_f64() * 1e3, ..stats },
-            fallback: (config.loop_canary || config.textures).then(|| scene.clone()),
+            fallback: config.may_hand_over().then(|| scene.clone()),
             counters,
             first_kernel,
         })
