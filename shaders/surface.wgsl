@@ -68,20 +68,31 @@ const SPAWN_OFFSET: f32 = 1.9073486328125e-6;
 // or 11 (2⁴), against 2 moved along d (2⁵). A ray leaving at less than SPAWN_MIN_COSINE to
 // the surface moves 1024 times the offset along itself, which no longer clears the
 // point's error: a reflected or refracted ray leaving that way hands its pixel over
-// (leaves_grazing).
+// (Leaving::grazing).
 fn spawn_origin(surface: Surface, side: vec3<f32>, d: vec3<f32>) -> vec3<f32> {
-    let away = max(dot3(d, side), SPAWN_MIN_COSINE);
-    return along(surface.point, SPAWN_OFFSET * surface.scale / away, d);
+    return start_along(surface, d, dot3(d, side));
+}
+
+// spawn_origin for a ray leaving at `cosine` (d·side) to the surface.
+fn start_along(surface: Surface, d: vec3<f32>, cosine: f32) -> vec3<f32> {
+    return along(surface.point, SPAWN_OFFSET * surface.scale / max(cosine, SPAWN_MIN_COSINE), d);
 }
 
 // The cosine to the surface below which spawn_origin's move stops growing.
 const SPAWN_MIN_COSINE: f32 = 0.0009765625; // 1/1024
 
-// Whether a ray leaving the surface in direction d (unit, on the side of `side`) leaves it
-// at less than SPAWN_MIN_COSINE: its start may then lie within the point's error of the
-// surface, and find it again.
-fn leaves_grazing(side: vec3<f32>, d: vec3<f32>) -> bool {
-    return dot3(d, side) < SPAWN_MIN_COSINE;
+// A reflected or refracted ray leaving the surface, started as spawn_origin starts it, and
+// whether it leaves at less than SPAWN_MIN_COSINE: its start may then lie within the
+// point's error of the surface, and find it again.
+struct Leaving {
+    ray: Ray,
+    grazing: bool,
+}
+
+// The ray leaving the surface in direction d (unit, on the side of the unit normal `side`).
+fn leaving(surface: Surface, side: vec3<f32>, d: vec3<f32>) -> Leaving {
+    let cosine = dot3(d, side);
+    return Leaving(Ray(start_along(surface, d, cosine), d), cosine < SPAWN_MIN_COSINE);
 }
 
 // How far a ray from the surface's point along the unit direction d goes inside the closed

@@ -43,23 +43,23 @@ fn pop_pending() -> Pending {
 }
 
 // Set where a reflected or refracted ray traced for the pixel left its surface grazing it
-// (leaves_grazing in shaders/surface.wgsl): the f32 kernel cannot start it faithfully, so
+// (Leaving::grazing in shaders/surface.wgsl): the f32 kernel cannot start it faithfully, so
 // the pixel is handed over to the reference, as one beyond a texture's reach is.
 var<private> spawned_grazing: bool;
 
-// Queues a ray whose colour counts `share` · `tint` times: not at all where the tint is
-// black or the weight it would carry falls below -weight. The weight leaves the share out,
-// as the reference's path weight does (a texture's materials each spawn their own rays).
-// `grazing`: the ray leaves its surface grazing it.
-fn push_ray(ray: Ray, tint: vec3<f32>, share: f32, parent: Pending, index: f32, grazing: bool) {
+// Queues the ray `leaving` a surface, whose colour counts `share` · `tint` times: not at
+// all where the tint is black or the weight it would carry falls below -weight. The weight
+// leaves the share out, as the reference's path weight does (a texture's materials each
+// spawn their own rays).
+fn push_ray(leaving: Leaving, tint: vec3<f32>, share: f32, parent: Pending, index: f32) {
     let weight = parent.weight * length(tint);
     if (all(tint == vec3<f32>(0.0)) || weight < P.weight) {
         return;
     }
-    if (grazing) {
+    if (leaving.grazing) {
         spawned_grazing = true;
     }
-    push_pending(Pending(ray, parent.throughput * (share * tint), weight, index, parent.bounces + 1u));
+    push_pending(Pending(leaving.ray, parent.throughput * (share * tint), weight, index, parent.bounces + 1u));
 }
 
 // The direction of the unit ray d refracted at a surface whose unit normal n faces it, from
@@ -113,12 +113,10 @@ fn push_material_children(surface: Surface, node: Pending, material: Material, s
     // Refraction first, so that reflection, which the reference adds first, is traced first.
     let refracted = refraction(d, n, node.index, index_to);
     if (refracted.w != 0.0) {
-        let ray = Ray(spawn_origin(surface, -n, refracted.xyz), refracted.xyz);
-        push_ray(ray, material.transparent, share, node, index_to, leaves_grazing(-n, refracted.xyz));
+        push_ray(leaving(surface, -n, refracted.xyz), material.transparent, share, node, index_to);
     }
     let reflected = d - rounded3(2.0 * dot3(d, n) * n);
-    let ray = Ray(spawn_origin(surface, n, reflected), reflected);
-    push_ray(ray, material.reflective, share, node, node.index, leaves_grazing(n, reflected));
+    push_ray(leaving(surface, n, reflected), material.reflective, share, node, node.index);
 }
 
 // The colour seen along a primary ray that hit `surface`: its own shading, then every ray of

@@ -25,11 +25,11 @@ struct Enlarge {
     row_texels: u32,
     // 1 where the target's bytes are blue, green, red, alpha; 0 for red, green, blue, alpha.
     bgra: u32,
-    // What the first word is, and what the pass makes of it: 0 a packed colour or |N|;
-    // 1 a depth's t (its bits; all ones where nothing was hit), shown in grey; 2 a depth
-    // kept as its bits while the frame's hits are gathered into `hit_range` (without a
-    // `-depth` range), for `grey` to show once the host has the range.
-    depth: u32,
+    // What the first word is, and what the pass makes of it: SHOWN_RGB a packed colour or
+    // |N|; SHOWN_GREY a depth's t (its bits; all ones where nothing was hit), shown in grey;
+    // SHOWN_DEPTH_OF_HITS a depth kept as its bits while the frame's hits are gathered into
+    // `hit_range` (without a `-depth` range), for `grey` to show once the host has the range.
+    shown: u32,
 }
 
 @group(0) @binding(0) var<storage, read> pixels: array<u32>;
@@ -41,7 +41,7 @@ struct Enlarge {
 // For a depth: depth_bounds[k] is the largest ordered key (below) whose grey level is at
 // least k (gpu::present::depth_bounds); [0] holds every key.
 @group(0) @binding(4) var<storage, read> depth_bounds: array<u32, 256>;
-// The ordered keys of the frame's nearest and farthest hit (depth 2).
+// The ordered keys of the frame's nearest and farthest hit (SHOWN_DEPTH_OF_HITS).
 @group(0) @binding(5) var<storage, read_write> hit_range: array<atomic<u32>, 2>;
 
 // A float's bits as a key that orders floats as unsigned integers: the sign bit flipped for
@@ -104,7 +104,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         atomicOr(&handed_over, 1u);
     }
     // Conditions every invocation shares: a CPU driver's lanes take the branches together.
-    if (E.depth == 2u) {
+    if (E.shown == SHOWN_DEPTH_OF_HITS) {
         if (first != 0xffffffffu && !handed) {
             let key = ordered_key(first);
             atomicMin(&hit_range[0], key);
@@ -114,13 +114,13 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     var rgb = first;
-    if (E.depth != 0u) {
+    if (E.shown == SHOWN_GREY) {
         rgb = depth_rgb(first);
     }
     fill_block(id.x, E.first_row + id.y, texel_of(rgb));
 }
 
-// The depths kept by `main` (depth 2) turned grey once the host has written the bounds of
+// The depths kept by `main` (SHOWN_DEPTH_OF_HITS) turned grey once the host has written the bounds of
 // the frame's range: one invocation per rendered pixel (`width` × `rows` of them, from
 // the top), reading its block's first texel and writing the block.
 @compute @workgroup_size(16, 16)

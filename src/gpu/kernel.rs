@@ -62,8 +62,9 @@ pub struct KernelConfig {
 /// Renders of at most this many samples (pixels × samples per pixel) share kernels
 /// ([`KernelConfig::shared`]): assignment 4's 200² lines compile 4 kernels instead of 13 on
 /// lavapipe. The branches a shared kernel keeps cost the heaviest of those lines 5 % of its
-/// kernel's time (a scene of triangles alone about 10 %); at this size that is about 50 ms, where compiling a kernel of its own
-/// costs lavapipe 0.1 to 2 s (docs/performance.md, "Compiles").
+/// kernel's time (a scene of triangles alone about 10 %); at this size that is about 50 ms,
+/// where compiling a kernel of its own costs lavapipe 0.1 to 2 s (docs/performance.md,
+/// "Compiles").
 pub const SHARED_KERNEL_MAX_SAMPLES: u64 = 512 * 512;
 
 /// A kernel as the renderer's cache of pipelines names it: its configuration and the mask of
@@ -174,7 +175,7 @@ impl KernelConfig {
     /// Whether the kernel may hand pixels over to the reference (`gpu::handover`): its
     /// driver may cut loops short ([`KernelConfig::loop_canary`]), a solid texture may be
     /// blended beyond its reach ([`super::texture_range`]), or a reflected or refracted ray
-    /// may leave its surface grazing it (`leaves_grazing` in shaders/surface.wgsl).
+    /// may leave its surface grazing it (`Leaving::grazing` in shaders/surface.wgsl).
     pub fn may_hand_over(&self) -> bool {
         self.loop_canary || self.textures || self.tree
     }
