@@ -1,8 +1,8 @@
 //! How a [`GpuRenderer`](super::GpuRenderer) renders: the choices its caller makes.
 
 /// The caller's cap on the output tile of one dispatch; the kind of adapter sets a lower one
-/// (`tiles::adapter_tile_bytes`: 1 MiB on lavapipe, 32 MiB on a discrete GPU). It also
-/// bounds host memory.
+/// (`tiles::adapter_tile_bytes`: 1 MiB on lavapipe, 2 MiB on a GPU). It also bounds host
+/// memory.
 pub const MAX_TILE_BYTES: u64 = 32 << 20;
 
 /// Below this many finite primitives the flat loops beat the hierarchy (lavapipe, at 200²:
