@@ -227,16 +227,18 @@ pub fn run_case(gpu: &GpuRenderer, case: &Case, runs: usize) -> Result<Row, GpuE
 
 /// The median of `runs` warm frames (after one thrown away): `scene` prepared once (its
 /// buffers, bins or hierarchy, and kernel), then rendered again and again, each frame's tiles
-/// read into one host frame of floats. What a live view pays for a frame that changes no
-/// buffer, and what Mitsuba 3 calls a warm frame (docs/performance.md).
+/// decoded straight into one host frame of floats that the loop keeps, as a live view or a
+/// notebook's loop over frames would. What a frame that changes no buffer costs, and what
+/// Mitsuba 3 calls a warm frame (docs/performance.md; Mitsuba's `numpy()` makes a new array
+/// each frame).
 pub fn warm_frame_ms(gpu: &GpuRenderer, scene: &Scene, options: &RenderOptions, runs: usize) -> Result<f64, GpuError> {
     let prepared = gpu.prepare(scene, options, false)?;
+    let mut frame = Frame::new(options);
     let mut times = Vec::new();
     for run in 0..=runs.max(1) {
         let start = Instant::now();
-        let mut frame = Frame::new(options);
         prepared.render(|tile| {
-            frame.paste(tile.first_row, &tile.to_frame());
+            tile.decode_into(&mut frame);
             Ok::<(), GpuError>(())
         })?;
         if run > 0 {

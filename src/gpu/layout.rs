@@ -348,24 +348,50 @@ impl PixelLayout {
 
     /// The frame of `rows` full rows that `words` (one tile, as read back) encode.
     pub fn decode(&self, options: &RenderOptions, rows: u32, words: &[u32]) -> Frame {
-        let f = |w: &[u32]| [f32::from_bits(w[0]), f32::from_bits(w[1]), f32::from_bits(w[2])];
-        let pixels = words.chunks_exact(self.words() as usize).map(|words| {
-            let mut pixel = Pixel { hit: words[0] != 0, ..Pixel::default() };
-            let mut w = 1;
-            if self.outputs.contains(Output::Color) {
-                pixel.color = f(&words[w..]);
-                w += 3;
+        let mut frame = Frame::new(&RenderOptions { height: rows, ..*options });
+        let pixels = frame.hit.len();
+        assert_eq!(
+            words.len(),
+            pixels * self.words() as usize,
+            "a {}×{rows} tile needs {pixels} pixels",
+            options.width
+        );
+        self.decode_into(words, &mut frame, 0);
+        frame
+    }
+
+    /// Writes the pixels that `words` (whole pixels of this float layout) encode into
+    /// `frame`, from pixel `first_pixel` (counted row by row from the top) on: a tile
+    /// decoded in place, with no frame of its own to make and copy.
+    ///
+    /// # Panics
+    /// If `frame` lacks an output this layout holds, or the pixels run past its end.
+    pub fn decode_into(&self, words: &[u32], frame: &mut Frame, first_pixel: usize) {
+        let stride = self.words() as usize;
+        let pixels = words.chunks_exact(stride);
+        let at = first_pixel..first_pixel + pixels.len();
+        let vector = |w: &[u32]| [f32::from_bits(w[0]), f32::from_bits(w[1]), f32::from_bits(w[2])];
+        for (hit, w) in frame.hit[at.clone()].iter_mut().zip(pixels.clone()) {
+            *hit = w[0] != 0;
+        }
+        let mut word = 1;
+        if self.outputs.contains(Output::Color) {
+            for (color, w) in frame.color[at.clone()].iter_mut().zip(pixels.clone()) {
+                *color = vector(&w[word..]);
             }
-            if self.outputs.contains(Output::Normals) {
-                pixel.normal = f(&words[w..]);
-                w += 3;
+            word += 3;
+        }
+        if self.outputs.contains(Output::Normals) {
+            for (normal, w) in frame.normal[at.clone()].iter_mut().zip(pixels.clone()) {
+                *normal = vector(&w[word..]);
             }
-            if self.outputs.contains(Output::Depth) {
-                pixel.depth = f32::from_bits(words[w]);
+            word += 3;
+        }
+        if self.outputs.contains(Output::Depth) {
+            for (depth, w) in frame.depth[at].iter_mut().zip(pixels) {
+                *depth = f32::from_bits(w[word]);
             }
-            pixel
-        });
-        Frame::from_pixels(&RenderOptions { height: rows, ..*options }, pixels)
+        }
     }
 }
 
@@ -537,6 +563,67 @@ pub fn sum_counters(words: &[u32]) -> crate::render::RayStats {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A float tile decoded in place lands on its rows of the frame, every output where the
+    /// pixel's words put it, and leaves the rows around it as they were.
+    #[test]
+    fn a_tile_decoded_into_a_frame_fills_its_rows_only() {
+        let outputs = [
+            Outputs::from(Output::Color),
+            Outputs::from(Output::Depth),
+            [Output::Normals, Output::Depth].into_iter().collect(),
+            Outputs::ALL,
+        ];
+        let (width, height, first_row, rows) = (5u32, 7u32, 2u32, 3u32);
+        let pixel = |k: usize| Pixel {
+            hit: !k.is_multiple_of(3),
+            color: [k as f32, 0.5 + k as f32, -(k as f32)],
+            normal: [1.0 / (k + 1) as f32, -2.0, 3.5],
+            depth: 10.0 + k as f32 * 0.25,
+        };
+        for outputs in outputs {
+            let layout = PixelLayout { outputs, packed: false };
+            let stride = layout.words() as usize;
+            let tile_pixels = (width * rows) as usize;
+            let mut words = vec![0u32; tile_pixels * stride];
+            for k in 0..tile_pixels {
+                layout.encode(&pixel(k), &mut words[k * stride..(k + 1) * stride]);
+            }
+            let options = RenderOptions { outputs, ..RenderOptions::all(width, height) };
+            let mut frame = Frame::new(&options);
+            let untouched = Pixel { hit: true, color: [7.0; 3], normal: [7.0; 3], depth: 7.0 };
+            frame.hit.fill(untouched.hit);
+            frame.color.fill(untouched.color);
+            frame.normal.fill(untouched.normal);
+            frame.depth.fill(untouched.depth);
+            let first = (first_row * width) as usize;
+            layout.decode_into(&words, &mut frame, first);
+            for k in 0..options.pixel_count() {
+                let expected = match k.checked_sub(first).filter(|&j| j < tile_pixels) {
+                    Some(j) => pixel(j),
+                    None => untouched,
+                };
+                let wants = |output| outputs.contains(output);
+                let got = frame.pixel(k);
+                assert_eq!(got.hit, expected.hit, "{outputs:?}: pixel {k}");
+                assert_eq!(
+                    got.color,
+                    if wants(Output::Color) { expected.color } else { [0.0; 3] },
+                    "{outputs:?}: pixel {k}"
+                );
+                assert_eq!(
+                    got.normal,
+                    if wants(Output::Normals) { expected.normal } else { [0.0; 3] },
+                    "{outputs:?}: pixel {k}"
+                );
+                assert_eq!(
+                    got.depth,
+                    if wants(Output::Depth) { expected.depth } else { 0.0 },
+                    "{outputs:?}: pixel {k}"
+                );
+            }
+        }
+    }
 
     /// Every layout: the vectorised scan finds a mark wherever the pixel-by-pixel reading
     /// finds one, and ignores the mark's value in a pixel's other words (a float colour or

@@ -26,6 +26,15 @@ impl ReadTile<'_> {
         self.layout.decode(self.options, self.rows, self.words)
     }
 
+    /// The tile decoded straight into its rows of `frame`, a whole image's float buffers
+    /// (a render prepared with `packed = false`): what [`ReadTile::to_frame`] and
+    /// [`Frame::paste`] do, without the tile's own frame.
+    pub fn decode_into(&self, frame: &mut Frame) {
+        assert!(!self.layout.packed, "a packed tile holds 8-bit images, not floats");
+        assert_eq!(frame.width, self.width, "tiles are full rows");
+        self.layout.decode_into(self.words, frame, self.first_row as usize * self.width as usize);
+    }
+
     /// The word of output `slot` (0 = the first output asked for) of each pixel.
     fn output_words(&self, slot: usize) -> impl ExactSizeIterator<Item = u32> + '_ {
         assert!(self.layout.packed, "a float tile holds no 8-bit images");

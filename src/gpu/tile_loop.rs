@@ -116,8 +116,8 @@ impl GpuRenderer {
     /// Renders `scene` into float buffers; see [`crate::image_io`] for images.
     pub fn render(&self, scene: &Scene, options: &RenderOptions) -> Result<Frame, GpuError> {
         let mut frame = Frame::new(options);
-        self.render_tiles(scene, options, |first_row, tile| {
-            frame.paste(first_row, &tile);
+        self.prepare(scene, options, false)?.render(|tile| {
+            tile.decode_into(&mut frame);
             Ok::<(), GpuError>(())
         })?;
         Ok(frame)

@@ -262,7 +262,7 @@ async fn render_tiles(
     let mut frame = Frame::new(options);
     let stats = prepared
         .render_async(|tile| {
-            frame.paste(tile.first_row, &tile.to_frame());
+            tile.decode_into(&mut frame);
             Ok::<(), GpuError>(())
         })
         .await?;
