@@ -209,15 +209,46 @@ impl Renderer {
     ) -> Result<Rendered, E> {
         let (renderer, handed_over) = self.for_scene(scene, options);
         let mut frame = Frame::new(options);
-        let (stats, notice) = renderer.render_band(scene, options, 0, options.height, |first_row, tile| {
-            frame.paste(first_row, &tile);
-            go_on()
-        })?;
+        let (stats, notice) = renderer.render_into(scene, options, &mut frame, &mut go_on)?;
         let backend = match &notice {
             Some(_) => REFERENCE.describe(),
             None => renderer.describe(),
         };
         Ok(Rendered { frame, stats, backend, notice: notice.or(handed_over.map(str::to_string)) })
+    }
+
+    /// Renders the whole image into `frame`, asking `go_on` after each tile: on the GPU each
+    /// tile is decoded straight into its rows ([`crate::gpu::ReadTile::decode_into`]), with no
+    /// frame of its own to make and copy; the reference's tiles are pasted.
+    #[cfg(not(target_arch = "wasm32"))]
+    fn render_into<E: From<GpuError>>(
+        &self,
+        scene: &Scene,
+        options: &RenderOptions,
+        frame: &mut Frame,
+        go_on: &mut impl FnMut() -> Result<(), E>,
+    ) -> Result<(RenderStats, Option<String>), E> {
+        let mut into = (frame, go_on);
+        let reference = |(frame, go_on): &mut (&mut Frame, &mut _)| {
+            reference_band(scene, options, (0, options.height), |first_row, tile| {
+                frame.paste(first_row, &tile);
+                go_on()
+            })
+        };
+        match self {
+            Renderer::Gpu(gpu, fallback) => or_reference(
+                *fallback,
+                &mut into,
+                |(frame, go_on)| {
+                    gpu.prepare(scene, options, false)?.render(|tile| {
+                        tile.decode_into(frame);
+                        go_on().map_err(Attempt::Tile)
+                    })
+                },
+                reference,
+            ),
+            Renderer::Cpu => Ok((reference(&mut into)?, None)),
+        }
     }
 
     /// Renders image rows `first .. first + rows` (the whole image, or one band of a split
