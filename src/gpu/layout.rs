@@ -564,16 +564,21 @@ pub fn sum_counters(words: &[u32]) -> crate::render::RayStats {
 mod tests {
     use super::*;
 
+    /// Sets of outputs that put each output first, after another and last in a pixel.
+    fn some_outputs() -> [Outputs; 5] {
+        [
+            Outputs::from(Output::Color),
+            Outputs::from(Output::Depth),
+            [Output::Color, Output::Normals].into_iter().collect(),
+            [Output::Normals, Output::Depth].into_iter().collect(),
+            Outputs::ALL,
+        ]
+    }
+
     /// A float tile decoded in place lands on its rows of the frame, every output where the
     /// pixel's words put it, and leaves the rows around it as they were.
     #[test]
     fn a_tile_decoded_into_a_frame_fills_its_rows_only() {
-        let outputs = [
-            Outputs::from(Output::Color),
-            Outputs::from(Output::Depth),
-            [Output::Normals, Output::Depth].into_iter().collect(),
-            Outputs::ALL,
-        ];
         let (width, height, first_row, rows) = (5u32, 7u32, 2u32, 3u32);
         let pixel = |k: usize| Pixel {
             hit: !k.is_multiple_of(3),
@@ -581,7 +586,7 @@ mod tests {
             normal: [1.0 / (k + 1) as f32, -2.0, 3.5],
             depth: 10.0 + k as f32 * 0.25,
         };
-        for outputs in outputs {
+        for outputs in some_outputs() {
             let layout = PixelLayout { outputs, packed: false };
             let stride = layout.words() as usize;
             let tile_pixels = (width * rows) as usize;
@@ -630,13 +635,7 @@ mod tests {
     /// depth may hold those bits).
     #[test]
     fn hands_over_any_agrees_with_handover() {
-        let outputs = [
-            Outputs::from(Output::Color),
-            Outputs::from(Output::Depth),
-            [Output::Color, Output::Normals].into_iter().collect(),
-            [Output::Color, Output::Normals, Output::Depth].into_iter().collect(),
-        ];
-        for (outputs, packed) in outputs.into_iter().flat_map(|o| [(o, true), (o, false)]) {
+        for (outputs, packed) in some_outputs().into_iter().flat_map(|o| [(o, true), (o, false)]) {
             let layout = PixelLayout { outputs, packed };
             let stride = layout.words() as usize;
             let pixels = 37;
