@@ -166,6 +166,20 @@ pub struct RenderStats {
     pub pixels_beyond_reach: u64,
     /// Time to flatten the scene into buffers (BVH build included) and upload them.
     pub prepare_ms: f64,
+    /// Of `prepare_ms`: the time a thread of its own took to compile the kernel, or find it
+    /// compiled, while the others flattened, built and uploaded (the longer of the two is
+    /// what preparing waited for).
+    pub compile_ms: f64,
+    /// Of `compile_ms`: specialising the kernel's module for this render (naga's IR, on the
+    /// host), before wgpu and the driver compile it.
+    pub specialise_ms: f64,
+    /// Time the calling thread waited for tiles to be read back, after preparing: what the
+    /// device, the readback and filling the tiles' lists cost beyond the caller's own work
+    /// on the tiles (decoding, encoding, writing), which overlaps them.
+    pub waited_ms: f64,
+    /// Time spent filling the bins' lists of the tiles after the first (on the thread that
+    /// submits them).
+    pub lists_ms: f64,
     /// Bytes of scene data on the device (primitives, materials, lights, hierarchy, and
     /// the bins: their edge planes and the buffers of the lists of each tile in flight).
     pub scene_bytes: u64,

@@ -35,6 +35,31 @@ fn gpu_tiles_equal_one_pass() {
     assert_eq!(small.render(&scene(), &options).unwrap(), whole);
 }
 
+/// `-v`'s split of a binned render in 18 tiles holds together: the kernel's thread (its
+/// specialising within it) took no longer than preparing, which waits for it; the caller
+/// waited for tiles no longer than the render took; every later tile filled its own lists,
+/// and a render of one tile fills none.
+#[test]
+fn the_split_of_a_render_holds_together() {
+    use raycaster::gpu::Acceleration;
+    let Some(gpu) = common::gpu() else { return };
+    let (width, height) = (61, 53);
+    let bins =
+        |max_tile_bytes| GpuOptions { acceleration: Acceleration::Bins, max_tile_bytes, ..GpuOptions::default() };
+    let options = RenderOptions::all(width, height);
+    for (tile_bytes, tiles) in [(width as u64 * 3 * 32, 18), (u64::MAX, 1)] {
+        let gpu = gpu.on_same_device(bins(tile_bytes));
+        let start = std::time::Instant::now();
+        let prepared = gpu.prepare(&lattice(), &options, false).unwrap();
+        let stats = prepared.render(|_| Ok::<(), raycaster::gpu::GpuError>(())).unwrap();
+        let wall_ms = start.elapsed().as_secs_f64() * 1e3;
+        assert_eq!((stats.tiles, stats.acceleration), (tiles, Acceleration::Bins));
+        assert!(stats.specialise_ms <= stats.compile_ms && stats.compile_ms <= stats.prepare_ms, "{stats:?}");
+        assert!(stats.prepare_ms + stats.waited_ms <= wall_ms, "{stats:?} in {wall_ms} ms");
+        assert_eq!(stats.lists_ms > 0.0, tiles > 1, "{stats:?}");
+    }
+}
+
 /// The awaited path a browser takes (one tile after another, each map awaited) gives the
 /// same floats as the threaded one, here driven by pollster, with tiles of 3 rows.
 #[test]

@@ -154,12 +154,20 @@ impl Report {
                 ));
             }
             // The parts of the GPU's rendering time that it measures on its own.
-            time += &format!(" (preparing {:.1} ms: buffers, pipeline, upload", stats.prepare_ms);
+            time += &format!(
+                " (preparing {:.1} ms: buffers, pipeline, upload; the kernel compiled or found in {:.1} ms beside \
+                 them, specialising it {:.1} ms",
+                stats.prepare_ms, stats.compile_ms, stats.specialise_ms
+            );
             if let Some(build) = stats.acceleration_build_ms {
                 time += &format!("; building the {} {build:.1} ms of it", stats.acceleration.name());
             }
             if let Some(ns) = stats.kernel_ns {
                 time += &format!("; kernel {:.1} ms", ns as f64 / 1e6);
+            }
+            time += &format!("; waiting for tiles {:.1} ms", stats.waited_ms);
+            if stats.lists_ms > 0.0 {
+                time += &format!("; filling the later tiles' lists {:.1} ms", stats.lists_ms);
             }
             time += ")";
             if stats.pixels_cut_short > 0 {

@@ -29,6 +29,9 @@ pub(super) struct Dispatch<'a> {
     /// The frame's screen-space bins, whose lists each tile fills for its own band of rows
     /// ([`Bins::band`]) into its slot's buffers.
     pub bins: Option<Bins>,
+    /// Nanoseconds spent filling slots' lists from the bins, over every tile so far
+    /// (`RenderStats::lists_ms`: a render reads the difference).
+    pub lists_ns: std::sync::atomic::AtomicU64,
 }
 
 impl Dispatch<'_> {
@@ -66,6 +69,7 @@ impl Dispatch<'_> {
         let (first, count) = Bins::rows_holding(first_row, rows);
         let mut holds = buffers.holds.lock().unwrap_or_else(|e| e.into_inner());
         if *holds != Some((first, count)) {
+            let filling = crate::clock::Instant::now();
             let band = bins.band(first, count);
             let queue = &self.gpu.queue;
             queue.write_buffer(&buffers.ranges, 0, bytemuck::cast_slice(&band.ranges));
@@ -73,6 +77,8 @@ impl Dispatch<'_> {
                 queue.write_buffer(&buffers.items, 0, bytemuck::cast_slice(&band.items));
             }
             *holds = Some((first, count));
+            let ns = filling.elapsed().as_nanos() as u64;
+            self.lists_ns.fetch_add(ns, std::sync::atomic::Ordering::Relaxed);
         }
         first
     }

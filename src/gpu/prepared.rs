@@ -85,7 +85,10 @@ impl<'a> PreparedScene<'a> {
         // finding candidates: exact but for bins, whose lists may turn out too long; then the
         // hierarchy's kernel is compiled by `upload` at once, not after the other.
         let (compiled, uploaded) = in_parallel(
-            || Compiled::new(gpu, planned, options, &scene.path),
+            || {
+                let compiling = crate::clock::Instant::now();
+                Compiled::new(gpu, planned, options, &scene.path).map(|c| (c, compiling.elapsed().as_secs_f64() * 1e3))
+            },
             || {
                 let uploaded = Uploaded::new(gpu, scene, options, layout, &mut buffers, &mut plan)?;
                 let config = config_for(&buffers, buffers.acceleration());
@@ -94,7 +97,11 @@ impl<'a> PreparedScene<'a> {
             },
         );
         let (config, unplanned, uploaded) = uploaded?;
-        let compiled = unplanned.unwrap_or(compiled)?;
+        let (compile_ms, specialise_ms) = compiled.as_ref().map_or((0.0, 0.0), |(c, ms)| (*ms, c.specialise_ms));
+        let compiled = match unplanned {
+            Some(instead) => instead?,
+            None => compiled?.0,
+        };
         let first_kernel = compiled.first;
         // Where the driver compiles at the first dispatch, a kernel a batch's twin device is
         // compiling is waited for: Mesa's cache then hands it over (gpu::ahead).
@@ -104,6 +111,8 @@ impl<'a> PreparedScene<'a> {
         let counters = Counters::new(gpu, options.stats);
         let stats = RenderStats {
             kernel_ns: gpu.timestamps.then_some(0),
+            compile_ms,
+            specialise_ms,
             grid_bounds: options.stats.then(|| buffers.grid_world_bounds(plan.rays.center)).flatten(),
             ..uploaded.stats(&buffers)
         };
@@ -316,6 +325,7 @@ impl Uploaded {
             tile_rows: self.tiling.tile_rows,
             slots,
             bins: buffers.bins.take(),
+            lists_ns: Default::default(),
         }
     }
 }

@@ -284,7 +284,14 @@ impl GpuRenderer {
         Ok(BindingSet::new(&self.device, mask))
     }
 
-    pub(super) fn pipeline(&self, config: KernelConfig, bindings: &BindingSet) -> wgpu::ComputePipeline {
+    /// The pipeline of `config`, compiled where no thread has yet; the time this call spent
+    /// specialising the kernel's module is added to `specialising`.
+    pub(super) fn pipeline(
+        &self,
+        config: KernelConfig,
+        bindings: &BindingSet,
+        specialising: &mut std::time::Duration,
+    ) -> wgpu::ComputePipeline {
         let key = (config, bindings.mask);
         let slot = {
             let mut cache = self.pipelines.lock().unwrap_or_else(|e| e.into_inner());
@@ -298,15 +305,20 @@ impl GpuRenderer {
         };
         // Compiled without the map's lock, so that two threads compile two kernels at once
         // (PreparedScene::new: a planned kernel and the one needed instead).
-        slot.get_or_init(|| self.compile(config, bindings)).clone()
+        slot.get_or_init(|| self.compile(config, bindings, specialising)).clone()
     }
 
-    fn compile(&self, config: KernelConfig, bindings: &BindingSet) -> wgpu::ComputePipeline {
+    fn compile(
+        &self,
+        config: KernelConfig,
+        bindings: &BindingSet,
+        specialising: &mut std::time::Duration,
+    ) -> wgpu::ComputePipeline {
         self.compiled.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-        let module = self.device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("raycast"),
-            source: specialise::shader_source(config.module()),
-        });
+        let start = crate::clock::Instant::now();
+        let source = specialise::shader_source(config.module());
+        *specialising += start.elapsed();
+        let module = self.device.create_shader_module(wgpu::ShaderModuleDescriptor { label: Some("raycast"), source });
         let pipeline = self.device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
             label: Some("raycast"),
             layout: Some(&bindings.pipeline),
@@ -347,6 +359,9 @@ pub(super) struct Compiled {
     pub bindings: BindingSet,
     pub pipeline: Option<wgpu::ComputePipeline>,
     pub sampled: Option<Sampled>,
+    /// Of the time these kernels took to compile, milliseconds spent specialising their
+    /// modules (`specialise`), not in wgpu and the driver; 0 where all were compiled before.
+    pub specialise_ms: f64,
 }
 
 impl Compiled {
@@ -362,14 +377,17 @@ impl Compiled {
         let bindings = gpu.bindings_for(&stages, file)?;
         let first = Self::first(config, options, &bindings);
         // A sampled render dispatches its samples and filter kernels only.
+        let mut specialising = std::time::Duration::ZERO;
         let (pipeline, sampled) = match options.sampling {
-            None => (Some(gpu.pipeline(config, &bindings)), None),
+            None => (Some(gpu.pipeline(config, &bindings, &mut specialising)), None),
             Some(sampling) => {
-                let stage = |stage| gpu.pipeline(KernelConfig { stage, ..config }, &bindings);
-                (None, Some(Sampled { sampling, samples: stage(Stage::Samples), filter: stage(Stage::Filter) }))
+                let mut stage = |stage| gpu.pipeline(KernelConfig { stage, ..config }, &bindings, &mut specialising);
+                let samples = stage(Stage::Samples);
+                (None, Some(Sampled { sampling, samples, filter: stage(Stage::Filter) }))
             }
         };
-        Ok(Compiled { first, bindings, pipeline, sampled })
+        let specialise_ms = specialising.as_secs_f64() * 1e3;
+        Ok(Compiled { first, bindings, pipeline, sampled, specialise_ms })
     }
 
     /// The kernels of `config` a render as `options` say binds.

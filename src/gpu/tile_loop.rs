@@ -11,6 +11,8 @@ use super::readback::{map_async, ReadTile};
 use crate::render::row_tiles;
 use crate::render::RenderStats;
 #[cfg(not(target_arch = "wasm32"))]
+use std::sync::atomic::Ordering;
+#[cfg(not(target_arch = "wasm32"))]
 use {super::renderer::GpuRenderer, crate::render::Frame, crate::render::RenderOptions, crate::scene::Scene};
 
 impl PreparedScene<'_> {
@@ -37,6 +39,8 @@ impl PreparedScene<'_> {
         let mut stats = self.stats;
         let counted = self.counters.zero(self.dispatch.gpu);
         let again = self.render_again();
+        let lists_before = self.dispatch.lists_ns.load(Ordering::Relaxed);
+        let mut waited = std::time::Duration::ZERO;
         std::thread::scope(|scope| {
             use std::sync::mpsc::sync_channel;
             let (ready_tx, ready_rx) = sync_channel(self.dispatch.slots.len());
@@ -57,8 +61,10 @@ impl PreparedScene<'_> {
                 }
             });
             for _ in &tiles {
-                let (slot, first_row, rows, kernel_ns) =
-                    ready_rx.recv().map_err(|e| GpuError::Readback(e.to_string()))??;
+                let waiting = std::time::Instant::now();
+                let ready = ready_rx.recv();
+                waited += waiting.elapsed();
+                let (slot, first_row, rows, kernel_ns) = ready.map_err(|e| GpuError::Readback(e.to_string()))??;
                 let readable = self.dispatch.slots[slot].buffers.readable();
                 let handed =
                     again.show_tile(readable, self.dispatch.tile_bytes(rows), (first_row, rows), &mut on_tile)?;
@@ -68,6 +74,8 @@ impl PreparedScene<'_> {
             }
             Ok::<(), E>(())
         })?;
+        stats.waited_ms = waited.as_secs_f64() * 1e3;
+        stats.lists_ms = (self.dispatch.lists_ns.load(Ordering::Relaxed) - lists_before) as f64 / 1e6;
         if let Some(counted) = counted {
             stats.counted = Some(again.add_counts(counted, self.counters.read(self.dispatch.gpu)?));
         }
