@@ -93,7 +93,7 @@ pub struct Rendered {
 
 impl Renderer {
     /// Opens the renderer `choice` asks for. With `Auto`, a missing GPU falls back to the CPU
-    /// reference and the returned notice says so.
+    /// reference and the returned notice says so; a setting the GPU refuses is an error.
     #[cfg(not(target_arch = "wasm32"))]
     pub fn open(choice: BackendChoice) -> Result<(Renderer, Option<String>), GpuError> {
         match choice {
@@ -101,6 +101,7 @@ impl Renderer {
             BackendChoice::Gpu => Ok((Renderer::on_gpu(GpuRenderer::new()?, choice), None)),
             BackendChoice::Auto => match GpuRenderer::new() {
                 Ok(gpu) => Ok((Renderer::on_gpu(gpu, choice), None)),
+                Err(e @ GpuError::Setting(_)) => Err(e),
                 Err(e) => Ok((Renderer::Cpu, Some(format!("{e}; rendering with the CPU reference instead")))),
             },
         }

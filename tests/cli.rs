@@ -180,6 +180,31 @@ fn without_an_adapter_gpu_fails_and_auto_falls_back() {
     assert!(out.exists());
 }
 
+/// A tile size the variable asks for that we refuse is an error naming the variable, with
+/// either GPU backend: `auto` does not hide it by rendering with the reference. No GPU is
+/// needed: the setting is read before any adapter is looked for.
+#[test]
+fn a_refused_tile_size_is_an_error_not_a_fallback() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("o.tga");
+    for backend in ["gpu", "auto"] {
+        let run = Command::new(env!("CARGO_BIN_EXE_raycaster"))
+            .args(["-input", "scenes/spheres_ortho.txt", "-size", "1500", "1500", "-output", path_str(&out)])
+            .args(["--backend", backend])
+            .env("RAYCASTER_TILE_MIB", "64")
+            .output()
+            .unwrap();
+        assert_eq!(run.status.code(), Some(1), "{backend}: {}", stderr(&run));
+        assert!(
+            stderr(&run).contains("RAYCASTER_TILE_MIB=\"64\": the tile's size is a whole number of MiB from 1 to 32"),
+            "{}",
+            stderr(&run)
+        );
+        assert!(!stderr(&run).contains("CPU reference"), "{}", stderr(&run));
+        assert!(!out.exists());
+    }
+}
+
 /// A job so small that the GPU's start-up would dominate (pixels × primitives at most
 /// `REFERENCE_QUICKER_BELOW`) is rendered by `auto` with the reference without opening the
 /// GPU at all: no driver is looked for, so none is missed, and the image is the reference's.

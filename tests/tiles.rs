@@ -35,6 +35,32 @@ fn gpu_tiles_equal_one_pass() {
     assert_eq!(small.render(&scene(), &options).unwrap(), whole);
 }
 
+/// A tile the caller aims for (`GpuOptions::tile_bytes`, which `RAYCASTER_TILE_MIB` sets)
+/// replaces the adapter's, whatever its kind: 256×1024 colour floats (4 MiB) render in four
+/// tiles of 1 MiB or in one of 4 MiB, to the same floats.
+#[test]
+fn the_tile_aimed_for_replaces_the_adapters() {
+    let Some(gpu) = common::gpu() else { return };
+    let options = RenderOptions { outputs: Output::Color.into(), ..RenderOptions::all(256, 1024) };
+    let render = |mib: u64| {
+        let aimed = gpu.on_same_device(GpuOptions { tile_bytes: Some(mib << 20), ..GpuOptions::default() });
+        let mut frame = raycaster::render::Frame::new(&options);
+        let prepared = aimed.prepare(&scene(), &options, false).unwrap();
+        let stats = prepared
+            .render(|tile| {
+                tile.decode_into(&mut frame);
+                Ok::<(), raycaster::gpu::GpuError>(())
+            })
+            .unwrap();
+        (stats.tiles, frame)
+    };
+    let (small_tiles, small) = render(1);
+    let (large_tiles, large) = render(4);
+    assert_eq!((small_tiles, large_tiles), (4, 1));
+    assert_eq!(small, large);
+    assert!(small.hit.iter().any(|&hit| hit), "the scene is in view");
+}
+
 /// `-v`'s split of a binned render in 18 tiles holds together: the kernel's thread (its
 /// specialising within it) took no longer than preparing, which waits for it; the caller
 /// waited for tiles no longer than the render took; every later tile filled its own lists,

@@ -9,6 +9,10 @@ pub enum GpuError {
     NoAdapter(String),
     #[error("could not open the GPU device: {0}")]
     Device(String),
+    /// A setting of ours the renderer refuses (an environment variable's value), which
+    /// `auto` does not hide by falling back to the reference.
+    #[error("{0}")]
+    Setting(String),
     #[error("the scene is too large for this GPU: {0}")]
     TooLarge(String),
     #[error("writing to the GPU's memory failed: {0}")]

@@ -15,6 +15,10 @@ pub struct GpuOptions {
     /// Caps the output buffer of one dispatch (or less if the adapter's limits are lower;
     /// at least one row); taller images render in several tiles.
     pub max_tile_bytes: u64,
+    /// The tile to aim for instead of the one of the adapter's kind (`tiles::adapter_tile_bytes`),
+    /// within `max_tile_bytes`: for measuring an adapter we have no figures for
+    /// ([`TILE_MIB_VARIABLE`]).
+    pub tile_bytes: Option<u64>,
     /// Scenes with at least this many finite primitives get a hierarchy; `usize::MAX` turns
     /// it off, 1 forces it on.
     pub bvh_min_primitives: usize,
@@ -41,6 +45,7 @@ impl Default for GpuOptions {
     fn default() -> Self {
         GpuOptions {
             max_tile_bytes: MAX_TILE_BYTES,
+            tile_bytes: None,
             bvh_min_primitives: BVH_MIN_PRIMITIVES,
             acceleration: Acceleration::Auto,
             shared_bin_loads: true,
@@ -50,4 +55,49 @@ impl Default for GpuOptions {
     }
 }
 
+/// The variable that sets [`GpuOptions::tile_bytes`] for the command line and the Python
+/// package: a whole number of MiB from 1 to 32 (docs/SPEC.md §6); unset or empty, the
+/// adapter's kind decides.
+pub const TILE_MIB_VARIABLE: &str = "RAYCASTER_TILE_MIB";
+
+impl GpuOptions {
+    /// The defaults, with the tile [`TILE_MIB_VARIABLE`] asks for; an error names the
+    /// variable and the value it refuses.
+    #[cfg(not(target_arch = "wasm32"))]
+    pub fn from_env() -> Result<GpuOptions, String> {
+        let value = std::env::var_os(TILE_MIB_VARIABLE).unwrap_or_default();
+        Ok(GpuOptions { tile_bytes: tile_bytes_of(&value.to_string_lossy())?, ..GpuOptions::default() })
+    }
+}
+
+/// The tile [`TILE_MIB_VARIABLE`]'s `value` asks for: `None` for an empty value.
+#[cfg(not(target_arch = "wasm32"))]
+fn tile_bytes_of(value: &str) -> Result<Option<u64>, String> {
+    if value.is_empty() {
+        return Ok(None);
+    }
+    let most = MAX_TILE_BYTES >> 20;
+    match value.parse::<u64>() {
+        Ok(mib) if (1..=most).contains(&mib) => Ok(Some(mib << 20)),
+        _ => Err(format!("{TILE_MIB_VARIABLE}={value:?}: the tile's size is a whole number of MiB from 1 to {most}")),
+    }
+}
+
 pub use crate::render::Acceleration;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The variable takes whole MiB within the cap, and nothing else, naming itself.
+    #[test]
+    fn the_tile_variable_takes_whole_mib_within_the_cap() {
+        assert_eq!(tile_bytes_of(""), Ok(None));
+        assert_eq!(tile_bytes_of("1"), Ok(Some(1 << 20)));
+        assert_eq!(tile_bytes_of("32"), Ok(Some(32 << 20)));
+        for refused in ["0", "33", "2.5", "-1", " 4", "four"] {
+            let error = tile_bytes_of(refused).unwrap_err();
+            assert!(error.starts_with(&format!("RAYCASTER_TILE_MIB={refused:?}")), "{error}");
+        }
+    }
+}

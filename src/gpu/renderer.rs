@@ -50,10 +50,11 @@ pub struct GpuRenderer {
 
 impl GpuRenderer {
     /// Opens the first adapter wgpu offers (real GPUs come before CPU ones such as lavapipe;
-    /// `WGPU_BACKEND` and the other wgpu environment variables are honoured).
+    /// `WGPU_BACKEND` and the other wgpu environment variables are honoured), rendering as
+    /// [`GpuOptions::from_env`] says.
     #[cfg(not(target_arch = "wasm32"))]
     pub fn new() -> Result<GpuRenderer, GpuError> {
-        Self::with_options(GpuOptions::default())
+        Self::with_options(GpuOptions::from_env().map_err(GpuError::Setting)?)
     }
 
     /// As [`GpuRenderer::new`], rendering as `options` say.

@@ -98,10 +98,11 @@ impl Tiling {
 }
 
 /// How many image rows one dispatch renders: as many as fit the adapter's storage
-/// binding limit, the tile of its kind of adapter ([`adapter_tile_bytes`]) and the caller's
-/// cap, and the dispatch size limit.
+/// binding limit, the tile of its kind of adapter ([`adapter_tile_bytes`]) or the one the
+/// caller aims for, the caller's cap, and the dispatch size limit.
 fn tile_rows(gpu: &GpuRenderer, width: u32, layout: &PixelLayout) -> Result<u32, GpuError> {
-    let cap = gpu.options.max_tile_bytes.min(adapter_tile_bytes(gpu.adapter_info.device_type));
+    let aim = gpu.options.tile_bytes.unwrap_or_else(|| adapter_tile_bytes(gpu.adapter_info.device_type));
+    let cap = gpu.options.max_tile_bytes.min(aim);
     rows_within(&gpu.limits, cap, width, layout.words())
 }
 
