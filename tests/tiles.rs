@@ -61,6 +61,29 @@ fn the_tile_aimed_for_replaces_the_adapters() {
     assert!(small.hit.iter().any(|&hit| hit), "the scene is in view");
 }
 
+/// 8-bit colour tiles written into their rows of one whole image (the bench's warm 8-bit
+/// frame) give the image the host quantises from the same scene's float render: tiles of
+/// 3 rows, the last shorter, each landing at its own rows.
+#[test]
+fn rgb8_tiles_written_into_one_image_make_the_whole_image() {
+    let Some(gpu) = common::gpu() else { return };
+    let options = RenderOptions { outputs: Output::Color.into(), ..RenderOptions::all(37, 23) };
+    let small = gpu.on_same_device(GpuOptions { max_tile_bytes: 37 * 3 * 4, ..GpuOptions::default() });
+    let mut rgb = vec![0u8; 37 * 23 * 3];
+    let stats = small
+        .prepare(&scene(), &options, true)
+        .unwrap()
+        .render(|tile| {
+            tile.color_rgb_into(&mut rgb);
+            Ok::<(), raycaster::gpu::GpuError>(())
+        })
+        .unwrap();
+    assert_eq!(stats.tiles, 8);
+    let floats = gpu.render(&scene(), &options).unwrap();
+    assert_eq!(rgb, color_image(&floats).into_raw());
+    assert!(rgb.iter().any(|&c| c > 0), "the scene is lit in view");
+}
+
 /// `-v`'s split of a binned render in 18 tiles holds together: the kernel's thread (its
 /// specialising within it) took no longer than preparing, which waits for it; the caller
 /// waited for tiles no longer than the render took; every later tile filled its own lists,

@@ -85,6 +85,9 @@ pub struct Row {
     /// A warm frame: the scene prepared once, rendered again and read into host memory as
     /// floats ([`warm_frame_ms`]).
     pub warm_ms: f64,
+    /// A warm frame of the colour alone as 8-bit RGB, quantised by the kernel (what
+    /// `-output` writes and the live view shows; [`warm_rgb8_frame_ms`]).
+    pub warm_rgb8_ms: f64,
     pub runs: usize,
     /// Peak resident memory of the process during the case (Linux only).
     pub peak_mib: Option<f64>,
@@ -194,6 +197,7 @@ pub fn run_case(gpu: &GpuRenderer, case: &Case, runs: usize) -> Result<Row, GpuE
         kernel.push(stats.kernel_ns.map_or(elapsed, |ns| ns as f64 / 1e6));
     }
     let warm_ms = warm_frame_ms(gpu, &case.scene, &options, runs)?;
+    let warm_rgb8_ms = warm_rgb8_frame_ms(gpu, &case.scene, &options, runs)?;
     let peak_mib = memory::peak_mib();
     let positions: Vec<(u32, u32)> = gpu_samples.iter().map(|s: &Sample| s.position).collect();
     let reference_renderer = Reference::new(&case.scene, &reference_options);
@@ -216,6 +220,7 @@ pub fn run_case(gpu: &GpuRenderer, case: &Case, runs: usize) -> Result<Row, GpuE
         timestamps,
         wall_ms: median(&mut wall),
         warm_ms,
+        warm_rgb8_ms,
         runs: runs.max(1),
         peak_mib,
         samples: positions.len(),
@@ -239,6 +244,32 @@ pub fn warm_frame_ms(gpu: &GpuRenderer, scene: &Scene, options: &RenderOptions, 
         let start = Instant::now();
         prepared.render(|tile| {
             tile.decode_into(&mut frame);
+            Ok::<(), GpuError>(())
+        })?;
+        if run > 0 {
+            times.push(start.elapsed().as_secs_f64() * 1e3);
+        }
+    }
+    Ok(median(&mut times))
+}
+
+/// [`warm_frame_ms`] for the colour alone, quantised by the kernel and read into one 8-bit
+/// RGB image the loop keeps: a quarter of the bytes of Mitsuba 3's frame of RGB floats, the
+/// image a user sees.
+pub fn warm_rgb8_frame_ms(
+    gpu: &GpuRenderer,
+    scene: &Scene,
+    options: &RenderOptions,
+    runs: usize,
+) -> Result<f64, GpuError> {
+    let options = RenderOptions { outputs: Output::Color.into(), ..*options };
+    let prepared = gpu.prepare(scene, &options, true)?;
+    let mut rgb = vec![0u8; options.width as usize * options.height as usize * 3];
+    let mut times = Vec::new();
+    for run in 0..=runs.max(1) {
+        let start = Instant::now();
+        prepared.render(|tile| {
+            tile.color_rgb_into(&mut rgb);
             Ok::<(), GpuError>(())
         })?;
         if run > 0 {
@@ -537,13 +568,13 @@ pub fn markdown(rows: &[Row], adapter: &str) -> String {
         rows.first().map_or(0, |r| r.runs)
     );
     out.push_str(
-        "| scene | triangle test | candidates from | primitives | pixels | build ms | kernel ms | wall ms | warm frame ms | rays/pixel | Mrays/s | reference Mrays/s | scene MiB | peak MiB | samples | >1 level | hit/miss | depth rel. max | normal max (rad) |\n\
-         | --- | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n",
+        "| scene | triangle test | candidates from | primitives | pixels | build ms | kernel ms | wall ms | warm frame ms | warm 8-bit colour ms | rays/pixel | Mrays/s | reference Mrays/s | scene MiB | peak MiB | samples | >1 level | hit/miss | depth rel. max | normal max (rad) |\n\
+         | --- | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n",
     );
     for r in rows {
         let _ = writeln!(
             out,
-            "| {} | {} | {} | {} | {}² | {} | {:.2} | {:.1} | {:.2} | {:.2} | {:.1} | {} | {:.2} | {} | {} | {:.3}% | {} | {:.1e} | {:.1e} |",
+            "| {} | {} | {} | {} | {}² | {} | {:.2} | {:.1} | {:.2} | {:.2} | {:.2} | {:.1} | {} | {:.2} | {} | {} | {:.3}% | {} | {:.1e} | {:.1e} |",
             r.name,
             r.triangle_test.name(),
             r.acceleration.name(),
@@ -553,6 +584,7 @@ pub fn markdown(rows: &[Row], adapter: &str) -> String {
             r.kernel_ms,
             r.wall_ms,
             r.warm_ms,
+            r.warm_rgb8_ms,
             r.rays as f64 / r.pixels() as f64,
             r.mrays_per_s(),
             r.reference_mrays_per_s().map_or("-".to_string(), |m| format!("{m:.2}")),
@@ -570,11 +602,11 @@ pub fn markdown(rows: &[Row], adapter: &str) -> String {
 
 /// The rows as CSV, one line each.
 pub fn csv(rows: &[Row]) -> String {
-    let mut out = String::from("scene,triangle_test,acceleration,primitives,triangles,width,height,acceleration_build_ms,scene_bytes,kernel_ms,kernel_from_timestamps,wall_ms,warm_frame_ms,rays,mrays_per_s,reference_ms,peak_mib,samples,off_by_more_than_one_fraction,hit_mismatches,depth_rel_max,normal_angle_max_rad,color_float_max\n");
+    let mut out = String::from("scene,triangle_test,acceleration,primitives,triangles,width,height,acceleration_build_ms,scene_bytes,kernel_ms,kernel_from_timestamps,wall_ms,warm_frame_ms,warm_rgb8_frame_ms,rays,mrays_per_s,reference_ms,peak_mib,samples,off_by_more_than_one_fraction,hit_mismatches,depth_rel_max,normal_angle_max_rad,color_float_max\n");
     for r in rows {
         let _ = writeln!(
             out,
-            "{},{},{},{},{},{},{},{},{},{:.4},{},{:.3},{:.3},{},{:.3},{},{},{},{:.6},{},{:.3e},{:.3e},{:.3e}",
+            "{},{},{},{},{},{},{},{},{},{:.4},{},{:.3},{:.3},{:.3},{},{:.3},{},{},{},{:.6},{},{:.3e},{:.3e},{:.3e}",
             r.name,
             r.triangle_test.name(),
             r.acceleration.name(),
@@ -588,6 +620,7 @@ pub fn csv(rows: &[Row]) -> String {
             r.timestamps,
             r.wall_ms,
             r.warm_ms,
+            r.warm_rgb8_ms,
             r.rays,
             r.mrays_per_s(),
             r.reference_ms.map_or(String::new(), |ms| format!("{ms:.3}")),

@@ -47,6 +47,18 @@ impl ReadTile<'_> {
         rgb_of(self.output_words(0))
     }
 
+    /// [`ReadTile::color_rgb`] written straight into its rows of `rgb`, a whole image's
+    /// 8-bit RGB (rows top first): a frame a loop keeps, with no tile of its own to make.
+    ///
+    /// # Panics
+    /// If the tile holds no colour, or its rows run past the end of `rgb`.
+    pub fn color_rgb_into(&self, rgb: &mut [u8]) {
+        assert!(self.layout.outputs.contains(Output::Color), "the tile holds no colour");
+        let row_bytes = self.width as usize * 3;
+        let start = self.first_row as usize * row_bytes;
+        rgb_into(self.output_words(0), &mut rgb[start..start + self.rows as usize * row_bytes]);
+    }
+
     /// 8-bit RGB rows of the normal visualisation `|N|`, quantised by the kernel.
     pub fn normals_rgb(&self) -> Vec<u8> {
         rgb_of(self.output_words(self.layout.outputs.contains(Output::Color) as usize))
@@ -70,10 +82,16 @@ impl ReadTile<'_> {
 /// Bytes r, g, b of words `r | g << 8 | b << 16`.
 fn rgb_of(words: impl ExactSizeIterator<Item = u32>) -> Vec<u8> {
     let mut out = vec![0; 3 * words.len()];
+    rgb_into(words, &mut out);
+    out
+}
+
+/// [`rgb_of`] into `out`, which holds exactly three bytes a word.
+fn rgb_into(words: impl ExactSizeIterator<Item = u32>, out: &mut [u8]) {
+    assert_eq!(out.len(), 3 * words.len(), "three bytes a pixel");
     for (rgb, w) in out.chunks_exact_mut(3).zip(words) {
         rgb.copy_from_slice(&w.to_le_bytes()[..3]);
     }
-    out
 }
 
 /// Maps `slice` for reading once `submission` is done, blocking until it is.
