@@ -14,8 +14,9 @@ Then one device run, `carry: [".device-kit"]`, `timeout_s` 600:
 
 In that run, within LIMIT seconds (545 unless $LIMIT says otherwise), in this order:
 HEAD's adapter, speed, samples and course sections; `compare` over scenes/hard and
-`selftest`; both builds' whole process minus a 16² run, interleaved, with `-v`'s split; the
-base's sections; `bench --only bunny_40k`'s warm frames; then the test suites for as long
+`selftest`; `-v`'s split at each tile size, a 16² render and the bytes' own write time
+(probe); both builds' whole process minus a 16² run, interleaved, with `-v`'s split; the
+base's sections but course; `bench --only bunny_40k`'s warm frames; then the test suites for as long
 as time is left. Each build's pass starts with empty caches (a fresh HOME and
 XDG_CACHE_HOME: the driver's and ours). $OUT receives log.txt, results.json, bench.csv and
 tests.log.
@@ -176,6 +177,50 @@ def run():
         for b in builds:
             check.log(f'pairs: a 16² render, whole process, {b}: median {statistics.median(small[b]) * 1e3:.0f} ms')
 
+    def probe():
+        """Where a render's time goes on this adapter: `-v`'s split (the kernel compiled
+        beside the upload, waiting for tiles, the later tiles' lists) at each tile size
+        RAYCASTER_TILE_MIB offers, the whole process of a 16² render, and the time the
+        same bytes take to write from Python (goal 1's yardstick)."""
+        w = check.bunny()
+        for size in [2048, 8192]:
+            for mib in [1, 2, 4, 8, 32]:
+                env = dict(os.environ, RAYCASTER_TILE_MIB=str(mib))
+                runs = [check.run([check.BIN, '-v', '-input', 'b.txt', '-size', str(size), str(size), '-output',
+                                   'o.tga', '--backend', 'gpu'], w, env=env) for _ in range(3)]
+                whole = statistics.median(t for t, _ in runs)
+                check.log(f'probe {size}² tiles of {mib} MiB: whole {whole * 1e3:.1f} ms; '
+                          f'{check.vlines(runs[-1][1].stderr)}')
+                results.setdefault('probe', {})[f'{size}/{mib}'] = whole
+        small = [check.run([check.BIN, '-input', 'b.txt', '-size', '16', '16', '-output', 'o.tga', '--backend',
+                            'gpu'], w)[0] for _ in range(9)]
+        check.log(f'probe: a 16² render, whole process: median {statistics.median(small) * 1e3:.1f} ms '
+                  f'(all: {[round(t * 1e3) for t in small]})')
+        for size in [2048, 8192]:
+            data = bytes(18 + 3 * size * size)
+            times = []
+            for _ in range(5):
+                t = time.perf_counter()
+                with open(os.path.join(w, 'raw.bin'), 'wb') as f:
+                    f.write(data)
+                times.append(time.perf_counter() - t)
+                os.remove(os.path.join(w, 'raw.bin'))
+            check.log(f'probe: writing the {size}² TGA\'s {len(data)} bytes from Python: median '
+                      f'{statistics.median(times) * 1e3:.1f} ms (all: {[round(t * 1e3) for t in times]})')
+        # The TGA writer alone: `stitch` of one part of the whole 8192² image (RGB rows in,
+        # the TGA out), the part copied back before each run since stitch removes it.
+        check.run([check.BIN, '-input', 'b.txt', '-size', '8192', '8192', '-output', 'p.tga', '--tile', '0/1',
+                   '--backend', 'gpu'], w)
+        part = os.path.join(w, 'p.tga.part-0-of-1')
+        if os.path.exists(part):
+            os.replace(part, part + '.keep')
+            times = []
+            for _ in range(3):
+                shutil.copy(part + '.keep', part)
+                times.append(check.run([check.BIN, 'stitch', '-output', 'p.tga'], w)[0])
+            check.log(f'probe: stitch of the 8192² part into a TGA: median {statistics.median(times) * 1e3:.1f} ms '
+                      f'(all: {[round(t * 1e3) for t in times]})')
+
     def bench():
         rc, text = shell(f'{check.BIN} bench --only bunny_40k --runs 7 --corpus {KIT}/mit6837 --out /tmp/k/bench',
                          min(60, left() - 20))
@@ -201,13 +246,15 @@ def run():
     check.log(f'limit {limit:.0f} s')
     for tag, binary, after in [('after', '/tmp/k/raycaster', True), ('before', '/tmp/k/raycaster_base', False)]:
         fresh_pass(tag, binary)
-        for name, need in [('adapter', 10), ('speed', 60), ('samples', 60), ('course', 80)]:
+        # The base's course images were checked on an earlier lease: its time goes to the tests.
+        for name, need in [('adapter', 10), ('speed', 60), ('samples', 60), ('course', 80)][:4 if after else 3]:
             section(name, need, getattr(check, name))
         results[tag] = check.RESULTS
         save()
         if after:
             section('hard and selftest', 40, hard_and_selftest)
-            section('pairs', 300, pairs)
+            section('probe', 60, probe)
+            section('pairs', 150, pairs)
     check.BIN = '/tmp/k/raycaster'
     section('bench', 60, bench)
     section('tests', 30, tests)
