@@ -60,6 +60,12 @@ impl GpuRenderer {
     /// As [`GpuRenderer::new`], rendering as `options` say.
     #[cfg(not(target_arch = "wasm32"))]
     pub fn with_options(options: GpuOptions) -> Result<GpuRenderer, GpuError> {
+        // The kernel's WGSL is parsed (once a process) while the driver opens the device,
+        // instead of on the way to the first render; a render that needs it first waits.
+        let _ = std::thread::Builder::new().name("parse-kernel".into()).spawn(|| match fuse::requested() {
+            true => drop(super::shader::fused_module()),
+            false => drop(super::shader::module()),
+        });
         pollster::block_on(Self::open(options))
     }
 
