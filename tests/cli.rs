@@ -180,6 +180,60 @@ fn without_an_adapter_gpu_fails_and_auto_falls_back() {
     assert!(out.exists());
 }
 
+/// Where the device opens while the scene is read (`--backend gpu`, and `auto` at a size
+/// that puts any scene on the GPU), the errors come as when one followed the other: with no
+/// adapter and a broken scene, `gpu` names the missing adapter and `auto` the scene's line
+/// and column, without a fallback notice for a render that never happens; neither writes.
+#[test]
+fn a_device_opened_beside_the_scene_reports_errors_in_order() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("bad.txt");
+    std::fs::write(&scene, "OrthographicCamera {\n  center 0 0 10\n  size two\n}\n").unwrap();
+    let out = dir.path().join("o.tga");
+    let run = |backend: &str| {
+        let size = "1500";
+        raycaster_without_gpu(&[
+            "-input",
+            path_str(&scene),
+            "-size",
+            size,
+            size,
+            "-output",
+            path_str(&out),
+            "--backend",
+            backend,
+        ])
+    };
+    let gpu = run("gpu");
+    assert_eq!(gpu.status.code(), Some(1), "{}", stderr(&gpu));
+    assert!(stderr(&gpu).contains("no GPU adapter found"), "{}", stderr(&gpu));
+    let auto = run("auto");
+    assert_eq!(auto.status.code(), Some(1), "{}", stderr(&auto));
+    assert!(stderr(&auto).contains(&format!("{}:3:8", scene.display())), "{}", stderr(&auto));
+    assert!(!stderr(&auto).contains("CPU reference"), "{}", stderr(&auto));
+    assert!(!out.exists());
+}
+
+/// An empty scene at a size that opens the GPU beside the reading: `auto` renders it with
+/// the reference, as it renders any job this small, and says nothing of the GPU.
+#[test]
+fn auto_sends_an_empty_scene_to_the_reference_at_any_size() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("empty.txt");
+    std::fs::write(
+        &scene,
+        "OrthographicCamera { center 0 0 10 direction 0 0 -1 up 0 1 0 size 2 }\n\
+         Background { color 0.2 0.4 0.6 }\nGroup { numObjects 0 }\n",
+    )
+    .unwrap();
+    let out = dir.path().join("o.tga");
+    let run = raycaster(&["-input", path_str(&scene), "-size", "1500", "1500", "-output", path_str(&out), "-v"]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    assert!(stderr(&run).contains("backend: cpu"), "{}", stderr(&run));
+    let image = raycaster::image_io::read_image(&out).unwrap();
+    assert_eq!(image.get_pixel(700, 700).0, [51, 102, 153], "the background, floor(255·v)");
+}
+
 /// A tile size the variable asks for that we refuse is an error naming the variable, with
 /// either GPU backend: `auto` does not hide it by rendering with the reference. No GPU is
 /// needed: the setting is read before any adapter is looked for.

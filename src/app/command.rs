@@ -9,7 +9,7 @@ use crate::app::args::{
 use crate::app::exit::{self, say, Failure};
 use crate::app::job::LineReport;
 use raycaster::render::Outputs;
-use raycaster::renderer::Renderer;
+use raycaster::renderer::{auto, Renderer};
 use raycaster::scene::SceneWarning;
 
 /// Runs one command line (the words after the program's name) to its end: what the binary
@@ -52,17 +52,38 @@ fn render(args: &RenderArgs, habits: Habits) -> Result<(), Failure> {
     if !args.writes_something() {
         return Ok(()); // `-gui` alone: the notice said so.
     }
-    let (backend, report) = if args.backend == BackendChoice::Auto {
+    let options = crate::app::job::options_for(args);
+    let (backend, report) = if args.backend == BackendChoice::Auto && !auto::samples_alone_open_the_gpu(&options) {
         // The scene first: a job small enough is rendered by the reference at once, without
         // paying for the GPU's start-up.
         let (scene, parse_ms) = crate::app::job::load(args)?;
-        let (backend, fallback) = Renderer::open_for(args.backend, &scene, &crate::app::job::options_for(args))?;
+        let (backend, fallback) = Renderer::open_for(args.backend, &scene, &options)?;
         say_fallback(fallback, habits);
         let report = crate::app::job::run_loaded(scene, parse_ms, args, &backend, progress)?;
         (backend, report)
     } else {
-        let backend = open_renderer(args.backend, habits)?;
-        let report = crate::app::job::run(args, &backend, progress)?;
+        // The scene is read while the device opens. The errors come in the order of before,
+        // when one followed the other: `auto`'s scene first, a chosen backend's device first.
+        let (opened, loaded) = std::thread::scope(|scope| {
+            let loading = scope.spawn(|| crate::app::job::load(args));
+            let opened = Renderer::open(args.backend);
+            (opened, loading.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic)))
+        });
+        let ((backend, fallback), (scene, parse_ms)) = match args.backend {
+            BackendChoice::Auto => {
+                let loaded = loaded?;
+                (opened?, loaded)
+            }
+            _ => (opened?, loaded?),
+        };
+        say_fallback(fallback, habits);
+        // `auto` opened the GPU for the job's size; a scene with nothing in it goes to the
+        // reference all the same, as `Renderer::open_for` would have sent it.
+        let backend = match backend {
+            _ if args.backend == BackendChoice::Auto && auto::reference_is_quicker(&scene, &options) => Renderer::Cpu,
+            backend => backend,
+        };
+        let report = crate::app::job::run_loaded(scene, parse_ms, args, &backend, progress)?;
         (backend, report)
     };
     say_warnings(&report.warnings, habits);

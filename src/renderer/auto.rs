@@ -22,6 +22,13 @@ pub fn reference_is_quicker(scene: &Scene, options: &RenderOptions) -> bool {
     options.sample_count() * per_ray <= REFERENCE_QUICKER_BELOW
 }
 
+/// Whether `auto` opens the GPU for a render as `options` say whatever its scene, but for
+/// a scene with nothing in it: its samples alone exceed [`REFERENCE_QUICKER_BELOW`], so the
+/// device can open while the scene is read.
+pub fn samples_alone_open_the_gpu(options: &RenderOptions) -> bool {
+    options.sample_count() > REFERENCE_QUICKER_BELOW
+}
+
 /// Primitives (each triangle of a mesh counted) up to which `auto` traces a scene that needs
 /// secondary rays with the reference rather than with a CPU Vulkan device (lavapipe; WARP):
 /// there the kernel's ray trees run no faster than the reference, which tests every
