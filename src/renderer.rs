@@ -219,8 +219,8 @@ impl Renderer {
     }
 
     /// Renders the whole image into `frame`, asking `go_on` after each tile: on the GPU each
-    /// tile is decoded straight into its rows ([`crate::gpu::ReadTile::decode_into`]), with no
-    /// frame of its own to make and copy; the reference's tiles are pasted.
+    /// tile is decoded straight into its rows ([`GpuRenderer::render_into`]), with no frame
+    /// of its own to make and copy; the reference's tiles are pasted.
     #[cfg(not(target_arch = "wasm32"))]
     fn render_into<E: From<GpuError>>(
         &self,
@@ -240,12 +240,7 @@ impl Renderer {
             Renderer::Gpu(gpu, fallback) => or_reference(
                 *fallback,
                 &mut into,
-                |(frame, go_on)| {
-                    gpu.prepare(scene, options, false)?.render(|tile| {
-                        tile.decode_into(frame);
-                        go_on().map_err(Attempt::Tile)
-                    })
-                },
+                |(frame, go_on)| gpu.render_into(scene, options, frame, || go_on().map_err(Attempt::Tile)),
                 reference,
             ),
             Renderer::Cpu => Ok((reference(&mut into)?, None)),

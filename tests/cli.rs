@@ -157,19 +157,7 @@ fn no_image_is_written_when_another_fails() {
 fn without_an_adapter_gpu_fails_and_auto_falls_back() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("o.tga");
-    let run = |backend: &str| {
-        raycaster_without_gpu(&[
-            "-input",
-            "scenes/spheres_ortho.txt",
-            "-size",
-            "1500",
-            "1500",
-            "-output",
-            path_str(&out),
-            "--backend",
-            backend,
-        ])
-    };
+    let run = |backend| render_1500_without_gpu("scenes/spheres_ortho.txt", &out, backend);
     let gpu = run("gpu");
     assert_eq!(gpu.status.code(), Some(1), "{}", stderr(&gpu));
     assert!(stderr(&gpu).contains("no GPU adapter found"), "{}", stderr(&gpu));
@@ -178,6 +166,13 @@ fn without_an_adapter_gpu_fails_and_auto_falls_back() {
     assert!(auto.status.success(), "{}", stderr(&auto));
     assert!(stderr(&auto).contains("rendering with the CPU reference instead"), "{}", stderr(&auto));
     assert!(out.exists());
+}
+
+/// `scene` rendered at 1500² (large enough that `auto` opens the GPU for any scene) into
+/// `out` with `backend`, where no Vulkan driver is found.
+fn render_1500_without_gpu(scene: &str, out: &Path, backend: &str) -> Output {
+    let size = "1500";
+    raycaster_without_gpu(&["-input", scene, "-size", size, size, "-output", path_str(out), "--backend", backend])
 }
 
 /// Where the device opens while the scene is read (`--backend gpu`, and `auto` at a size
@@ -190,20 +185,7 @@ fn a_device_opened_beside_the_scene_reports_errors_in_order() {
     let scene = dir.path().join("bad.txt");
     std::fs::write(&scene, "OrthographicCamera {\n  center 0 0 10\n  size two\n}\n").unwrap();
     let out = dir.path().join("o.tga");
-    let run = |backend: &str| {
-        let size = "1500";
-        raycaster_without_gpu(&[
-            "-input",
-            path_str(&scene),
-            "-size",
-            size,
-            size,
-            "-output",
-            path_str(&out),
-            "--backend",
-            backend,
-        ])
-    };
+    let run = |backend| render_1500_without_gpu(path_str(&scene), &out, backend);
     let gpu = run("gpu");
     assert_eq!(gpu.status.code(), Some(1), "{}", stderr(&gpu));
     assert!(stderr(&gpu).contains("no GPU adapter found"), "{}", stderr(&gpu));

@@ -93,11 +93,9 @@ fn the_split_of_a_render_holds_together() {
     use raycaster::gpu::Acceleration;
     let Some(gpu) = common::gpu() else { return };
     let (width, height) = (61, 53);
-    let bins =
-        |max_tile_bytes| GpuOptions { acceleration: Acceleration::Bins, max_tile_bytes, ..GpuOptions::default() };
     let options = RenderOptions::all(width, height);
     for (tile_bytes, tiles) in [(width as u64 * 3 * 32, 18), (u64::MAX, 1)] {
-        let gpu = gpu.on_same_device(bins(tile_bytes));
+        let gpu = gpu.on_same_device(binned(tile_bytes));
         let start = std::time::Instant::now();
         let prepared = gpu.prepare(&lattice(), &options, false).unwrap();
         let stats = prepared.render(|_| Ok::<(), raycaster::gpu::GpuError>(())).unwrap();
@@ -363,6 +361,11 @@ fn lattice() -> raycaster::scene::Scene {
     raycaster::scene::parse_scene(&text, "lattice.txt".as_ref()).unwrap()
 }
 
+/// Options that find candidates through the bins, in tiles of at most `max_tile_bytes`.
+fn binned(max_tile_bytes: u64) -> GpuOptions {
+    GpuOptions { acceleration: raycaster::gpu::Acceleration::Bins, max_tile_bytes, ..GpuOptions::default() }
+}
+
 /// Each tile binds only the bins of its own band of rows, indexed from the band's first bin
 /// row (docs/SPEC.md §6): tiles of 3 rows (so bands start inside a bin, and a packet of 4
 /// rows inside a tile) and a band of a split render starting at row 13 give what one tile,
@@ -372,10 +375,8 @@ fn gpu_binned_tiles_equal_one_pass() {
     use raycaster::gpu::{Acceleration, GpuRenderer};
     let Some(gpu) = common::gpu() else { return };
     let (width, height) = (61, 53);
-    let bins =
-        |max_tile_bytes| GpuOptions { acceleration: Acceleration::Bins, max_tile_bytes, ..GpuOptions::default() };
-    let whole_gpu = gpu.on_same_device(bins(u64::MAX));
-    let small = gpu.on_same_device(bins(width as u64 * 3 * 32));
+    let whole_gpu = gpu.on_same_device(binned(u64::MAX));
+    let small = gpu.on_same_device(binned(width as u64 * 3 * 32));
     let sampled = RenderOptions {
         sampling: Some(raycaster::sampling::Sampling {
             sampler: raycaster::sampling::Sampler::Jittered(4),

@@ -11,7 +11,7 @@ use crate::app::memory;
 use glam::DVec3;
 use raycaster::cpu::Reference;
 use raycaster::gpu::ray_tree::RenderRays;
-use raycaster::gpu::{Acceleration, GpuError, GpuOptions, GpuRenderer};
+use raycaster::gpu::{Acceleration, GpuError, GpuOptions, GpuRenderer, ReadTile};
 use raycaster::grid::GridSize;
 use raycaster::metrics::{compare_frames, depth_range_of, OutputErrors};
 use raycaster::render::{Frame, Output, Pixel, RenderOptions, Shading, TriangleTest};
@@ -239,18 +239,11 @@ pub fn run_case(gpu: &GpuRenderer, case: &Case, runs: usize) -> Result<Row, GpuE
 pub fn warm_frame_ms(gpu: &GpuRenderer, scene: &Scene, options: &RenderOptions, runs: usize) -> Result<f64, GpuError> {
     let prepared = gpu.prepare(scene, options, false)?;
     let mut frame = Frame::new(options);
-    let mut times = Vec::new();
-    for run in 0..=runs.max(1) {
-        let start = Instant::now();
-        prepared.render(|tile| {
-            tile.decode_into(&mut frame);
-            Ok::<(), GpuError>(())
-        })?;
-        if run > 0 {
-            times.push(start.elapsed().as_secs_f64() * 1e3);
-        }
-    }
-    Ok(median(&mut times))
+    let mut decode = |tile: &ReadTile| {
+        tile.decode_into(&mut frame);
+        Ok::<(), GpuError>(())
+    };
+    median_frame_ms(runs, || prepared.render(&mut decode).map(drop))
 }
 
 /// [`warm_frame_ms`] for the colour alone, quantised by the kernel and read into one 8-bit
@@ -265,16 +258,21 @@ pub fn warm_rgb8_frame_ms(
     let options = RenderOptions { outputs: Output::Color.into(), ..*options };
     let prepared = gpu.prepare(scene, &options, true)?;
     let mut rgb = vec![0u8; options.width as usize * options.height as usize * 3];
+    let mut read = |tile: &ReadTile| {
+        tile.color_rgb_into(&mut rgb);
+        Ok::<(), GpuError>(())
+    };
+    median_frame_ms(runs, || prepared.render(&mut read).map(drop))
+}
+
+/// The median milliseconds of `runs` calls of `frame`, after one thrown away.
+fn median_frame_ms(runs: usize, mut frame: impl FnMut() -> Result<(), GpuError>) -> Result<f64, GpuError> {
+    frame()?;
     let mut times = Vec::new();
-    for run in 0..=runs.max(1) {
+    for _ in 0..runs.max(1) {
         let start = Instant::now();
-        prepared.render(|tile| {
-            tile.color_rgb_into(&mut rgb);
-            Ok::<(), GpuError>(())
-        })?;
-        if run > 0 {
-            times.push(start.elapsed().as_secs_f64() * 1e3);
-        }
+        frame()?;
+        times.push(start.elapsed().as_secs_f64() * 1e3);
     }
     Ok(median(&mut times))
 }

@@ -124,11 +124,23 @@ impl GpuRenderer {
     /// Renders `scene` into float buffers; see [`crate::image_io`] for images.
     pub fn render(&self, scene: &Scene, options: &RenderOptions) -> Result<Frame, GpuError> {
         let mut frame = Frame::new(options);
-        self.prepare(scene, options, false)?.render(|tile| {
-            tile.decode_into(&mut frame);
-            Ok::<(), GpuError>(())
-        })?;
+        self.render_into(scene, options, &mut frame, || Ok::<(), GpuError>(()))?;
         Ok(frame)
+    }
+
+    /// Renders `scene` into `frame`, a whole image's float buffers, each tile decoded straight
+    /// into its rows; `after_tile`'s error stops the render there and is returned.
+    pub fn render_into<E: From<GpuError>>(
+        &self,
+        scene: &Scene,
+        options: &RenderOptions,
+        frame: &mut Frame,
+        mut after_tile: impl FnMut() -> Result<(), E>,
+    ) -> Result<RenderStats, E> {
+        self.prepare(scene, options, false)?.render(|tile| {
+            tile.decode_into(frame);
+            after_tile()
+        })
     }
 
     /// Renders `scene` in tiles of full rows, top first, handing each to `on_tile` with its
