@@ -28,6 +28,7 @@ pub mod auto;
 mod bands;
 
 use crate::gpu::{GpuError, GpuRenderer};
+use crate::image_io::RgbRows;
 use crate::render::{Frame, Output, RenderStats};
 #[cfg(not(target_arch = "wasm32"))]
 use crate::{render::RenderOptions, scene::Scene};
@@ -282,16 +283,16 @@ impl Renderer {
         options: &RenderOptions,
         depth_range: (f32, f32),
         (first, rows): (u32, u32),
-        mut on_tile: impl FnMut(u32, ImageRows) -> Result<(), E>,
+        mut on_tile: impl FnMut(u32, ImageRows<'_>) -> Result<(), E>,
     ) -> Result<(RenderStats, Option<String>), E> {
         use crate::image_io;
         let (min, max) = depth_range;
         let wants = |output| options.outputs.contains(output);
         let from_frame = |frame: &Frame| ImageRows {
             rows: frame.height,
-            color: wants(Output::Color).then(|| image_io::color_image(frame).into_raw()),
-            normals: wants(Output::Normals).then(|| image_io::normals_image(frame).into_raw()),
-            depth: wants(Output::Depth).then(|| image_io::depth_image(frame, min, max).into_raw()),
+            color: wants(Output::Color).then(|| Rows8::Made(image_io::color_image(frame).into_raw())),
+            normals: wants(Output::Normals).then(|| Rows8::Made(image_io::normals_image(frame).into_raw())),
+            depth: wants(Output::Depth).then(|| Rows8::Made(image_io::depth_image(frame, min, max).into_raw())),
         };
         match self {
             Renderer::Gpu(gpu, fallback) => or_reference(
@@ -301,9 +302,9 @@ impl Renderer {
                     gpu.prepare(scene, options, true)?.render_band(first, rows, |tile| {
                         let rows = ImageRows {
                             rows: tile.rows,
-                            color: wants(Output::Color).then(|| tile.color_rgb()),
-                            normals: wants(Output::Normals).then(|| tile.normals_rgb()),
-                            depth: wants(Output::Depth).then(|| tile.depth_rgb(min, max)),
+                            color: wants(Output::Color).then(|| Rows8::Read(tile.color_rows())),
+                            normals: wants(Output::Normals).then(|| Rows8::Read(tile.normals_rows())),
+                            depth: wants(Output::Depth).then(|| Rows8::Made(tile.depth_rgb(min, max))),
                         };
                         on_tile(tile.first_row, rows).map_err(Attempt::Tile)
                     })
@@ -332,23 +333,37 @@ pub fn fallback_notice(e: &GpuError) -> Option<String> {
     Some(format!("{reason}; rendering with the f64 CPU reference instead"))
 }
 
-/// One tile's rows of each 8-bit image asked for, RGB, top row first.
-pub struct ImageRows {
+/// One tile's rows of each 8-bit image asked for, top row first: as the kernel packed them
+/// where the GPU rendered them (a writer reorders them into its file at once), else as
+/// bytes quantised on the host.
+pub struct ImageRows<'a> {
     /// How many rows the tile has.
     pub rows: u32,
-    pub color: Option<Vec<u8>>,
-    pub normals: Option<Vec<u8>>,
-    pub depth: Option<Vec<u8>>,
+    pub color: Option<Rows8<'a>>,
+    pub normals: Option<Rows8<'a>>,
+    pub depth: Option<Rows8<'a>>,
 }
 
-impl ImageRows {
-    /// The rows of `output`'s image, once (each output is asked for at most once).
-    pub fn take(&mut self, output: Output) -> Vec<u8> {
+/// An 8-bit image's rows, read back from the device or made on the host.
+pub enum Rows8<'a> {
+    Read(RgbRows<'a>),
+    Made(Vec<u8>),
+}
+
+impl ImageRows<'_> {
+    /// The rows of `output`'s image.
+    ///
+    /// # Panics
+    /// If the render did not compute `output`.
+    pub fn pixels(&self, output: Output) -> RgbRows<'_> {
         let rows = match output {
-            Output::Color => &mut self.color,
-            Output::Normals => &mut self.normals,
-            Output::Depth => &mut self.depth,
+            Output::Color => &self.color,
+            Output::Normals => &self.normals,
+            Output::Depth => &self.depth,
         };
-        rows.take().expect("the render computed every output asked for")
+        match rows.as_ref().expect("the render computed every output asked for") {
+            Rows8::Read(read) => *read,
+            Rows8::Made(bytes) => RgbRows::Bytes(bytes),
+        }
     }
 }

@@ -299,6 +299,40 @@ fn png_in_strips_reads_back_identical_with_checksums_checked() {
     }
 }
 
+/// Pixels packed one to a word as the kernel packs them (`r | g << 8 | b << 16`), every
+/// other word another output's and the top byte set, streamed in uneven calls into a TGA
+/// (several reordered writes a call) and a PNG (a strip boundary inside a call): the image
+/// crate reads back the pixels the words hold, and the files are byte for byte those the
+/// same pixels make as bytes.
+#[test]
+fn packed_pixels_stream_into_files_that_read_back_identical() {
+    use raycaster::image_io::{PackedRgb, RgbRows};
+    let (w, h) = (301usize, 977usize);
+    let pixels: Vec<u8> = (0..w * h * 3).map(|k| (k.wrapping_mul(2_654_435_761) >> 13) as u8).collect();
+    let words: Vec<u32> =
+        pixels.chunks_exact(3).flat_map(|p| [u32::from_le_bytes([p[0], p[1], p[2], 0xee]), 0xdead_beef]).collect();
+    let dir = tempfile::tempdir().unwrap();
+    for name in ["packed.tga", "packed.png"] {
+        let write = |path: &std::path::Path, packed: bool| {
+            let mut file = ImageFile::create(path, w as u32, h as u32).unwrap();
+            for (start, end) in [(0, 1), (1, 600), (600, 601), (601, h)] {
+                if packed {
+                    let rows = PackedRgb::new(&words[2 * start * w..], 2, (end - start) * w);
+                    file.write_pixels(RgbRows::Packed(rows)).unwrap();
+                } else {
+                    file.write_rows(&pixels[start * w * 3..end * w * 3]).unwrap();
+                }
+            }
+            raycaster::image_io::persist_all(vec![file.finish().unwrap()]).unwrap();
+        };
+        let (packed, bytes) = (dir.path().join(name), dir.path().join(format!("bytes_{name}")));
+        write(&packed, true);
+        write(&bytes, false);
+        assert!(read_image(&packed).unwrap().as_raw() == &pixels, "{name}: other pixels");
+        assert!(std::fs::read(&packed).unwrap() == std::fs::read(&bytes).unwrap(), "{name}: other bytes");
+    }
+}
+
 /// A file that did not receive all its rows is refused, and nothing is left behind.
 #[test]
 fn incomplete_file_is_refused() {

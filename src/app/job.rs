@@ -249,11 +249,11 @@ pub fn render_scene(
             .collect::<Result<Vec<_>, _>>()?,
     };
     let bar = Progress::new(progress, u64::from(band.1), "rows");
-    // One tile's rows into every sink, `pixels` giving each output's; counted as writing.
-    let mut write = |rows: u32, pixels: &mut dyn FnMut(&OutputFile) -> Pixels| {
+    // One tile's rows into every sink, `write_to` writing each output's; counted as writing.
+    let mut write = |rows: u32, write_to: &mut dyn FnMut(&OutputFile, &mut Sink) -> Result<(), ImageError>| {
         let written = Instant::now();
         for (sink, o) in sinks.iter_mut().zip(&outputs) {
-            sink.write(&pixels(o))?;
+            write_to(o, sink)?;
         }
         writing += written.elapsed();
         bar.advance(u64::from(rows));
@@ -265,14 +265,14 @@ pub fn render_scene(
     } else if reads_floats(&outputs) {
         // Floats leave the backend as they are, for the EXR files.
         backend.render_band(scene, &options, band.0, band.1, |_first_row, tile| {
-            write(tile.height, &mut |o| o.pixels(&tile))
+            write(tile.height, &mut |o, sink| sink.write(&o.pixels(&tile)))
         })?
     } else {
         // 8-bit images only: on the GPU the kernel quantises (a fraction of the bytes to
         // read back, and no float decoding).
         let depth_range = args.files.depth_range().unwrap_or((0.0, 1.0));
-        backend.render_images(scene, &options, depth_range, band, |_first_row, mut images| {
-            write(images.rows, &mut |o| Pixels::Rgb8(images.take(o.output)))
+        backend.render_images(scene, &options, depth_range, band, |_first_row, images| {
+            write(images.rows, &mut |o, sink| sink.write(&Pixels::Rows(images.pixels(o.output))))
         })?
     };
     drop(bar);

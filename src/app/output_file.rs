@@ -4,7 +4,7 @@
 use crate::app::args::OutputPaths;
 use crate::app::part::{PartHeader, PartWriter};
 use raycaster::image_io::{
-    self, ExrChannels, ExrCompression, ExrFile, FinishedImage, ImageError, ImageFile, ImageFormat,
+    self, ExrChannels, ExrCompression, ExrFile, FinishedImage, ImageError, ImageFile, ImageFormat, RgbRows,
 };
 use raycaster::render::{Frame, Output};
 use std::path::PathBuf;
@@ -22,9 +22,11 @@ pub struct OutputFile {
     pub exr_compression: ExrCompression,
 }
 
-/// Rows of final pixel data: 8-bit RGB, or floats for EXR.
-pub enum Pixels {
+/// Rows of final pixel data: 8-bit RGB made on the host or read back (perhaps packed), or
+/// floats for EXR.
+pub enum Pixels<'a> {
     Rgb8(Vec<u8>),
+    Rows(RgbRows<'a>),
     Float(Vec<f32>),
 }
 
@@ -51,7 +53,7 @@ impl OutputFile {
     }
 
     /// The tile's rows as this file stores them.
-    pub fn pixels(&self, tile: &Frame) -> Pixels {
+    pub fn pixels(&self, tile: &Frame) -> Pixels<'static> {
         match (self.format, self.output) {
             (ImageFormat::Exr, Output::Color) => Pixels::Float(image_io::color_values(tile)),
             (ImageFormat::Exr, Output::Normals) => Pixels::Float(image_io::normal_values(tile)),
@@ -127,8 +129,10 @@ impl Sink {
     pub fn write(&mut self, pixels: &Pixels) -> Result<(), ImageError> {
         match (self, pixels) {
             (Sink::Image(file), Pixels::Rgb8(rgb)) => file.write_rows(rgb),
+            (Sink::Image(file), Pixels::Rows(rows)) => file.write_pixels(*rows),
             (Sink::Exr(file), Pixels::Float(values)) => file.write_rows(values),
             (Sink::Part(part), Pixels::Rgb8(rgb)) => part.write(rgb),
+            (Sink::Part(part), Pixels::Rows(rows)) => part.write(&rows.to_vec()),
             (Sink::Part(part), Pixels::Float(values)) => {
                 part.write(&values.iter().flat_map(|v| v.to_le_bytes()).collect::<Vec<u8>>())
             }

@@ -6,6 +6,7 @@ use super::error::GpuError;
 use super::layout::{sum_counters, PixelLayout, PACKED_MISS, STATS_SLOTS, STATS_WORDS};
 use super::oneshot::OneShot;
 use super::renderer::GpuRenderer;
+use crate::image_io::{PackedRgb, RgbRows};
 use crate::render::{Frame, Output, RayStats, RenderOptions};
 
 /// One tile as the kernel wrote it and the host read it back, floats or packed 8-bit words
@@ -39,12 +40,28 @@ impl ReadTile<'_> {
     fn output_words(&self, slot: usize) -> impl ExactSizeIterator<Item = u32> + '_ {
         assert!(self.layout.packed, "a float tile holds no 8-bit images");
         let stride = self.layout.words() as usize;
-        self.words.iter().skip(slot).step_by(stride).copied().take(self.width as usize * self.rows as usize)
+        self.words.iter().skip(slot).step_by(stride).copied().take(self.pixels())
+    }
+
+    /// Output `slot`'s pixels as the kernel packed them, for a writer to reorder.
+    fn output_rows(&self, slot: usize) -> RgbRows<'_> {
+        assert!(self.layout.packed, "a float tile holds no 8-bit images");
+        RgbRows::Packed(PackedRgb::new(&self.words[slot..], self.layout.words() as usize, self.pixels()))
+    }
+
+    fn pixels(&self) -> usize {
+        self.width as usize * self.rows as usize
+    }
+
+    /// The diffuse-shaded image's rows, quantised by the kernel, as it packed them.
+    pub fn color_rows(&self) -> RgbRows<'_> {
+        assert!(self.layout.outputs.contains(Output::Color), "the tile holds no colour");
+        self.output_rows(0)
     }
 
     /// 8-bit RGB rows of the diffuse-shaded image, quantised by the kernel.
     pub fn color_rgb(&self) -> Vec<u8> {
-        rgb_of(self.output_words(0))
+        self.color_rows().to_vec()
     }
 
     /// [`ReadTile::color_rgb`] written straight into its rows of `rgb`, a whole image's
@@ -53,15 +70,19 @@ impl ReadTile<'_> {
     /// # Panics
     /// If the tile holds no colour, or its rows run past the end of `rgb`.
     pub fn color_rgb_into(&self, rgb: &mut [u8]) {
-        assert!(self.layout.outputs.contains(Output::Color), "the tile holds no colour");
-        let row_bytes = self.width as usize * 3;
-        let start = self.first_row as usize * row_bytes;
-        rgb_into(self.output_words(0), &mut rgb[start..start + self.rows as usize * row_bytes]);
+        let start = self.first_row as usize * self.width as usize * 3;
+        self.color_rows().rgb_into(0, &mut rgb[start..start + 3 * self.pixels()]);
+    }
+
+    /// The rows of the normal visualisation `|N|`, quantised by the kernel, as it packed them.
+    pub fn normals_rows(&self) -> RgbRows<'_> {
+        assert!(self.layout.outputs.contains(Output::Normals), "the tile holds no normals");
+        self.output_rows(self.layout.outputs.contains(Output::Color) as usize)
     }
 
     /// 8-bit RGB rows of the normal visualisation `|N|`, quantised by the kernel.
     pub fn normals_rgb(&self) -> Vec<u8> {
-        rgb_of(self.output_words(self.layout.outputs.contains(Output::Color) as usize))
+        self.normals_rows().to_vec()
     }
 
     /// 8-bit RGB rows of the depth visualisation; the kernel hands over the distance `t`
@@ -76,21 +97,6 @@ impl ReadTile<'_> {
             out.extend_from_slice(&[grey; 3]);
         }
         out
-    }
-}
-
-/// Bytes r, g, b of words `r | g << 8 | b << 16`.
-fn rgb_of(words: impl ExactSizeIterator<Item = u32>) -> Vec<u8> {
-    let mut out = vec![0; 3 * words.len()];
-    rgb_into(words, &mut out);
-    out
-}
-
-/// [`rgb_of`] into `out`, which holds exactly three bytes a word.
-fn rgb_into(words: impl ExactSizeIterator<Item = u32>, out: &mut [u8]) {
-    assert_eq!(out.len(), 3 * words.len(), "three bytes a pixel");
-    for (rgb, w) in out.chunks_exact_mut(3).zip(words) {
-        rgb.copy_from_slice(&w.to_le_bytes()[..3]);
     }
 }
 

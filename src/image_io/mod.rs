@@ -16,7 +16,9 @@ use std::sync::{Mutex, MutexGuard, PoisonError};
 
 mod exr_file;
 mod in_order;
+mod rgb_rows;
 pub use exr_file::{ExrChannels, ExrCompression, ExrFile};
+pub use rgb_rows::{PackedRgb, RgbRows};
 
 /// docs/SPEC.md §5: `floor(255·clamp(v, 0, 1))`. NaN becomes 0.
 pub fn quantize(v: f32) -> u8 {
@@ -186,13 +188,19 @@ impl ImageFile {
 
     /// Appends whole rows of 8-bit RGB, continuing from the last row written.
     pub fn write_rows(&mut self, rgb: &[u8]) -> Result<(), ImageError> {
-        let row_bytes = self.width as usize * 3;
-        assert_eq!(rgb.len() % row_bytes, 0, "whole rows only");
-        let rows = (rgb.len() / row_bytes) as u32;
+        assert_eq!(rgb.len() % (self.width as usize * 3), 0, "whole rows only");
+        self.write_pixels(RgbRows::Bytes(rgb))
+    }
+
+    /// Appends whole rows of pixels, bytes or packed, continuing from the last row written.
+    pub fn write_pixels(&mut self, pixels: RgbRows) -> Result<(), ImageError> {
+        let width = self.width as usize;
+        assert_eq!(pixels.pixels() % width, 0, "whole rows only");
+        let rows = (pixels.pixels() / width) as u32;
         assert!(self.rows_written + rows <= self.height, "more rows than the image has");
         let result = match &mut self.encoder {
-            Encoder::Tga(out) => out.write_rows(rgb, row_bytes, self.height - self.rows_written - rows),
-            Encoder::Png(out) => out.write_rows(rgb),
+            Encoder::Tga(out) => out.write_rows(pixels, width, self.height - self.rows_written - rows),
+            Encoder::Png(out) => out.write_rows(pixels),
         };
         result.map_err(|e| self.error(e.to_string()))?;
         self.rows_written += rows;
@@ -367,20 +375,18 @@ fn tga_start(mut file: std::fs::File, width: u32, height: u32) -> std::io::Resul
 impl TgaWriter {
     /// Rows arrive top first but TGA stores the bottom row first: the block lands at file
     /// row `bottom_row` (counted from the bottom), its rows reversed, pixels as BGR.
-    fn write_rows(&mut self, rgb: &[u8], row_bytes: usize, bottom_row: u32) -> std::io::Result<()> {
+    fn write_rows(&mut self, pixels: RgbRows, width: usize, bottom_row: u32) -> std::io::Result<()> {
         use std::io::{Seek, SeekFrom};
+        let row_bytes = 3 * width;
         self.file.seek(SeekFrom::Start(TGA_HEADER + bottom_row as u64 * row_bytes as u64))?;
         // Bottom row first, the rows go out in file order, a few at a time.
         let rows_per_write = (TGA_WRITE / row_bytes).max(1);
-        let mut rows = rgb.chunks_exact(row_bytes).rev().peekable();
+        let mut rows = (0..pixels.pixels() / width).rev().peekable();
         while rows.peek().is_some() {
-            let batch: Vec<&[u8]> = rows.by_ref().take(rows_per_write).collect();
+            let batch: Vec<usize> = rows.by_ref().take(rows_per_write).collect();
             self.block.resize(batch.len() * row_bytes, 0);
-            for (to, from) in self.block.chunks_exact_mut(row_bytes).zip(batch) {
-                // Pixels as arrays: the compiler moves several at a time.
-                for (t, f) in to.as_chunks_mut::<3>().0.iter_mut().zip(from.as_chunks::<3>().0) {
-                    *t = [f[2], f[1], f[0]];
-                }
+            for (to, row) in self.block.chunks_exact_mut(row_bytes).zip(batch) {
+                pixels.bgr_into(row * width, to);
             }
             self.file.write_all(&self.block)?;
         }
@@ -452,14 +458,20 @@ struct Strip {
 }
 
 impl PngWriter {
-    fn write_rows(&mut self, mut rgb: &[u8]) -> std::io::Result<()> {
-        while !rgb.is_empty() {
+    fn write_rows(&mut self, pixels: RgbRows) -> std::io::Result<()> {
+        let width = self.row_bytes / 3;
+        let mut row = 0;
+        let rows = pixels.pixels() / width;
+        while row < rows {
             let gathered = self.strip.len() / self.row_bytes;
-            let take = (self.strip_rows - gathered).min(rgb.len() / self.row_bytes);
-            let (rows, rest) = rgb.split_at(take * self.row_bytes);
-            self.strip.extend_from_slice(rows);
+            let take = (self.strip_rows - gathered).min(rows - row);
+            if gathered == 0 {
+                self.strip.reserve_exact(self.strip_rows.min(self.rows_left) * self.row_bytes);
+            }
+            self.strip.resize((gathered + take) * self.row_bytes, 0);
+            pixels.rgb_into(row * width, &mut self.strip[gathered * self.row_bytes..]);
             self.rows_left -= take;
-            rgb = rest;
+            row += take;
             if gathered + take == self.strip_rows || self.rows_left == 0 {
                 self.deflate_strip()?;
             }
