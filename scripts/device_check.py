@@ -14,8 +14,8 @@ Then one device run, `carry: [".device-kit"]`, `timeout_s` 600:
 
 In that run, within LIMIT seconds (545 unless $LIMIT says otherwise), in this order:
 HEAD's adapter, speed, samples and course sections; `compare` over scenes/hard and
-`selftest`; `-v`'s split at each tile size, a 16² render and the bytes' own write time
-(probe); both builds' whole process minus a 16² run, interleaved, with `-v`'s split; the
+`selftest`; `-v`'s split at each tile size and with 1 to 4 tiles in flight, a 16² render
+and the bytes' own write time (probe); both builds' whole process minus a 16² run, interleaved, with `-v`'s split; the
 base's sections but course; `bench --only bunny_40k`'s warm frames; then the test suites for as long
 as time is left. Each build's pass starts with empty caches (a fresh HOME and
 XDG_CACHE_HOME: the driver's and ours). $OUT receives log.txt, results.json, bench.csv and
@@ -180,18 +180,22 @@ def run():
     def probe():
         """Where a render's time goes on this adapter: `-v`'s split (the kernel compiled
         beside the upload, waiting for tiles, the later tiles' lists) at each tile size
-        RAYCASTER_TILE_MIB offers, the whole process of a 16² render, and the time the
-        same bytes take to write from Python (goal 1's yardstick)."""
+        RAYCASTER_TILE_MIB offers and with 1 to 4 tiles in flight (RAYCASTER_TILE_SLOTS),
+        the whole process of a 16² render, and the time the same bytes take to write from
+        Python (goal 1's yardstick)."""
         w = check.bunny()
+        # Tile sizes, then tiles in flight at the adapter's own tile: with more in flight the
+        # device renders the next tiles while the renderer's thread waits for one.
+        settings = [('RAYCASTER_TILE_MIB', mib, f'tiles of {mib} MiB') for mib in [1, 2, 4, 8, 32]]
+        settings += [('RAYCASTER_TILE_SLOTS', n, f'{n} in flight') for n in [1, 2, 3, 4]]
         for size in [2048, 8192]:
-            for mib in [1, 2, 4, 8, 32]:
-                env = dict(os.environ, RAYCASTER_TILE_MIB=str(mib))
+            for variable, value, said in settings:
+                env = dict(os.environ, **{variable: str(value)})
                 runs = [check.run([check.BIN, '-v', '-input', 'b.txt', '-size', str(size), str(size), '-output',
                                    'o.tga', '--backend', 'gpu'], w, env=env) for _ in range(3)]
                 whole = statistics.median(t for t, _ in runs)
-                check.log(f'probe {size}² tiles of {mib} MiB: whole {whole * 1e3:.1f} ms; '
-                          f'{check.vlines(runs[-1][1].stderr)}')
-                results.setdefault('probe', {})[f'{size}/{mib}'] = whole
+                check.log(f'probe {size}² {said}: whole {whole * 1e3:.1f} ms; {check.vlines(runs[-1][1].stderr)}')
+                results.setdefault('probe', {})[f'{size}/{variable}={value}'] = whole
         small = [check.run([check.BIN, '-input', 'b.txt', '-size', '16', '16', '-output', 'o.tga', '--backend',
                             'gpu'], w)[0] for _ in range(9)]
         check.log(f'probe: a 16² render, whole process: median {statistics.median(small) * 1e3:.1f} ms '

@@ -216,28 +216,35 @@ fn auto_sends_an_empty_scene_to_the_reference_at_any_size() {
     assert_eq!(image.get_pixel(700, 700).0, [51, 102, 153], "the background, floor(255·v)");
 }
 
-/// A tile size the variable asks for that we refuse is an error naming the variable, with
-/// either GPU backend: `auto` does not hide it by rendering with the reference. No GPU is
-/// needed: the setting is read before any adapter is looked for.
+/// A tile size or a number of tiles in flight the variables ask for that we refuse is an
+/// error naming the variable, with either GPU backend: `auto` does not hide it by rendering
+/// with the reference. No GPU is needed: the settings are read before any adapter is looked
+/// for.
 #[test]
-fn a_refused_tile_size_is_an_error_not_a_fallback() {
+fn a_refused_tile_setting_is_an_error_not_a_fallback() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("o.tga");
-    for backend in ["gpu", "auto"] {
-        let run = Command::new(env!("CARGO_BIN_EXE_raycaster"))
-            .args(["-input", "scenes/spheres_ortho.txt", "-size", "1500", "1500", "-output", path_str(&out)])
-            .args(["--backend", backend])
-            .env("RAYCASTER_TILE_MIB", "64")
-            .output()
-            .unwrap();
-        assert_eq!(run.status.code(), Some(1), "{backend}: {}", stderr(&run));
-        assert!(
-            stderr(&run).contains("RAYCASTER_TILE_MIB=\"64\": the tile's size is a whole number of MiB from 1 to 32"),
-            "{}",
-            stderr(&run)
-        );
-        assert!(!stderr(&run).contains("CPU reference"), "{}", stderr(&run));
-        assert!(!out.exists());
+    let refused = [
+        (
+            "RAYCASTER_TILE_MIB",
+            "64",
+            "RAYCASTER_TILE_MIB=\"64\": the tile's size is a whole number of MiB from 1 to 32",
+        ),
+        ("RAYCASTER_TILE_SLOTS", "0", "RAYCASTER_TILE_SLOTS=\"0\": the tiles in flight are a whole number from 1 to 8"),
+    ];
+    for (variable, value, said) in refused {
+        for backend in ["gpu", "auto"] {
+            let run = Command::new(env!("CARGO_BIN_EXE_raycaster"))
+                .args(["-input", "scenes/spheres_ortho.txt", "-size", "1500", "1500", "-output", path_str(&out)])
+                .args(["--backend", backend])
+                .env(variable, value)
+                .output()
+                .unwrap();
+            assert_eq!(run.status.code(), Some(1), "{backend}: {}", stderr(&run));
+            assert!(stderr(&run).contains(said), "{}", stderr(&run));
+            assert!(!stderr(&run).contains("CPU reference"), "{}", stderr(&run));
+            assert!(!out.exists());
+        }
     }
 }
 

@@ -107,6 +107,48 @@ fn the_split_of_a_render_holds_together() {
     }
 }
 
+/// However many tiles are in flight (`GpuOptions::tile_slots`, which `RAYCASTER_TILE_SLOTS`
+/// sets), a binned render in 18 tiles hands them over top first, each once, and makes the
+/// floats of one tile holding every bin, whether the host maps the kernel's buffers or each
+/// tile is copied for it (as on a discrete GPU); with 4 in flight, a caller that stops at the
+/// fifth tile gets its own error back, and no tile after it.
+#[test]
+fn tiles_in_flight_change_no_pixel_and_stop_where_the_caller_says() {
+    let Some(gpu) = common::gpu() else { return };
+    let (width, height) = (61, 53);
+    let options = RenderOptions::all(width, height);
+    let whole = gpu.on_same_device(binned(u64::MAX)).render(&lattice(), &options).unwrap();
+    let in_flight = |slots, mapped_buffers| {
+        gpu.on_same_device(GpuOptions { tile_slots: slots, mapped_buffers, ..binned(width as u64 * 3 * 32) })
+    };
+    for (slots, mapped) in [(1, true), (2, true), (3, true), (8, true), (3, false)] {
+        let gpu = in_flight(slots, mapped);
+        let mut frame = raycaster::render::Frame::new(&options);
+        let mut first_rows = Vec::new();
+        let prepared = gpu.prepare(&lattice(), &options, false).unwrap();
+        let stats = prepared
+            .render(|tile| {
+                first_rows.push(tile.first_row);
+                tile.decode_into(&mut frame);
+                Ok::<(), raycaster::gpu::GpuError>(())
+            })
+            .unwrap();
+        assert_eq!(stats.tiles, 18, "{slots} in flight");
+        assert_eq!(first_rows, (0..18).map(|k| 3 * k).collect::<Vec<u32>>(), "{slots} in flight");
+        assert!(frame == whole, "{slots} in flight: other floats");
+    }
+    let mut handed = 0;
+    let stopped = in_flight(4, true).prepare(&lattice(), &options, false).unwrap().render(|_| {
+        handed += 1;
+        match handed {
+            5 => Err(raycaster::gpu::GpuError::Readback("stopped by the test".into())),
+            _ => Ok(()),
+        }
+    });
+    assert!(matches!(stopped, Err(raycaster::gpu::GpuError::Readback(why)) if why == "stopped by the test"));
+    assert_eq!(handed, 5);
+}
+
 /// The awaited path a browser takes (one tile after another, each map awaited) gives the
 /// same floats as the threaded one, here driven by pollster, with tiles of 3 rows.
 #[test]

@@ -43,7 +43,19 @@ impl Dispatch<'_> {
     /// returns the kernel time where the adapter measures it.
     #[cfg(not(target_arch = "wasm32"))]
     pub fn run_tile(&self, slot: usize, first_row: u32, rows: u32) -> Result<Option<u64>, GpuError> {
-        let submission = self.submit_tile(slot, first_row, rows);
+        self.wait_tile(slot, rows, self.submit_tile(slot, first_row, rows))
+    }
+
+    /// Waits until the host can read (mapped) the tile of `rows` rows that `submission`
+    /// renders into `slot` ([`Dispatch::submit_tile`]); returns the kernel time where the
+    /// adapter measures it.
+    #[cfg(not(target_arch = "wasm32"))]
+    pub fn wait_tile(
+        &self,
+        slot: usize,
+        rows: u32,
+        submission: wgpu::SubmissionIndex,
+    ) -> Result<Option<u64>, GpuError> {
         let s = &self.slots[slot].buffers;
         map_and_wait(&self.gpu.device, &s.readable().slice(..self.tile_bytes(rows)), submission)?;
         match &s.timer {

@@ -58,7 +58,7 @@ pub use ahead::Ahead;
 pub use bindings::Binding;
 pub use error::GpuError;
 pub use kernel::{KernelConfig, Stage, SHARED_KERNEL_MAX_SAMPLES};
-pub use options::{Acceleration, GpuOptions, MAX_TILE_BYTES, TILE_MIB_VARIABLE};
+pub use options::{Acceleration, GpuOptions, MAX_TILE_BYTES, TILE_MIB_VARIABLE, TILE_SLOTS, TILE_SLOTS_VARIABLE};
 pub use prepared::PreparedScene;
 #[cfg(not(target_arch = "wasm32"))]
 pub use present::{Presented, Presenter};

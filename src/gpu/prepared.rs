@@ -1,9 +1,10 @@
 //! A scene uploaded and bound once, then rendered tile by tile with the same buffers, bind
 //! groups and pipeline (as wgpu's `repeated_compute` example keeps its own).
 //!
-//! Two sets of per-tile buffers take turns: a thread of ours submits tile k + 1 and waits for
-//! it while the caller's thread decodes and writes tile k, so the host's share of the work
-//! (decoding, quantising, writing files) overlaps the device's instead of following it.
+//! Sets of per-tile buffers (slots, two unless `GpuOptions::tile_slots` says otherwise) take
+//! turns: a thread of ours submits the next tiles and waits for them while the caller's
+//! thread decodes and writes the one before, so the host's share of the work (decoding,
+//! quantising, writing files) overlaps the device's instead of following it.
 //! In a browser, which has neither the thread nor a blocking wait, [`PreparedScene::render_async`]
 //! renders the tiles one after another and awaits each.
 
@@ -270,7 +271,7 @@ impl Uploaded {
         });
         let tile_bytes = options.width as u64 * tiling.tile_rows as u64 * layout.words() as u64 * 4;
         let sizes = SlotSizes { tile_bytes, sample_bytes: tiling.sample_bytes, band_bytes: tiling.band_bytes };
-        let slots = options.height.div_ceil(tiling.tile_rows).min(2);
+        let slots = options.height.div_ceil(tiling.tile_rows).min(gpu.options.tile_slots.max(1) as u32);
         let slot_buffers = (0..slots)
             .map(|k| TileBuffers::new(gpu, sizes, first_band.as_ref().filter(|_| k == 0)))
             .collect::<Result<_, _>>()?;

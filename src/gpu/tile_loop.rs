@@ -1,7 +1,8 @@
-//! The tile loops of a prepared scene. Natively two slots of per-tile buffers take turns:
-//! a thread of ours submits tile k + 1 and waits for it while the caller's thread decodes
-//! and writes tile k, so the host's share of the work overlaps the device's instead of
-//! following it. In a browser, which has neither the thread nor a blocking wait,
+//! The tile loops of a prepared scene. Natively the slots of per-tile buffers (two unless
+//! `GpuOptions::tile_slots` says otherwise) take turns: a thread of ours submits a tile into
+//! every free slot and waits for the oldest while the caller's thread decodes and writes the
+//! tile before, so the host's share of the work overlaps the device's instead of following
+//! it. In a browser, which has neither the thread nor a blocking wait,
 //! [`PreparedScene::render_async`] renders the tiles one after another and awaits each.
 
 use super::error::GpuError;
@@ -50,10 +51,21 @@ impl PreparedScene<'_> {
             }
             let submitter = tiles.clone();
             scope.spawn(move || {
-                for (first_row, rows) in submitter {
-                    // The caller stopped (an error, or all tiles done): nothing more to submit.
-                    let Ok(slot) = free_rx.recv() else { return };
-                    let result = self.dispatch.run_tile(slot, first_row, rows);
+                let mut next = submitter.into_iter().peekable();
+                let mut in_flight = std::collections::VecDeque::new();
+                loop {
+                    // Every free slot gets the next tile at once, so that the device renders
+                    // one tile while this thread waits for the one before; a slot is waited
+                    // for only when no tile is in flight. The caller stopped (an error, or
+                    // all tiles done): nothing more to submit.
+                    while next.peek().is_some() {
+                        let free = if in_flight.is_empty() { free_rx.recv().ok() } else { free_rx.try_recv().ok() };
+                        let Some(slot) = free else { break };
+                        let (first_row, rows) = next.next().expect("peeked");
+                        in_flight.push_back((slot, first_row, rows, self.dispatch.submit_tile(slot, first_row, rows)));
+                    }
+                    let Some((slot, first_row, rows, submission)) = in_flight.pop_front() else { return };
+                    let result = self.dispatch.wait_tile(slot, rows, submission);
                     let failed = result.is_err();
                     if ready_tx.send(result.map(|ns| (slot, first_row, rows, ns))).is_err() || failed {
                         return;
