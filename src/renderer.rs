@@ -272,27 +272,33 @@ impl Renderer {
         }
     }
 
-    /// Renders the 8-bit images `options` asks for (the depth visualisation over
-    /// `depth_range`) for image rows `first .. first + rows` (the whole image, or one band of
-    /// a split render), in tiles of full rows, top first. On the GPU the kernel quantises,
-    /// so only the bytes of the images cross from the device.
+    /// Renders the 8-bit images `options` asks for, and its depth as `depth` says, for image
+    /// rows `first .. first + rows` (the whole image, or one band of a split render), in
+    /// tiles of full rows, top first. On the GPU the kernel quantises the images and hands
+    /// over the distances' bits, so only those words cross from the device.
     #[cfg(not(target_arch = "wasm32"))]
     pub fn render_images<E: From<GpuError>>(
         &self,
         scene: &Scene,
         options: &RenderOptions,
-        depth_range: (f32, f32),
+        depth: DepthAs,
         (first, rows): (u32, u32),
         mut on_tile: impl FnMut(u32, ImageRows<'_>) -> Result<(), E>,
     ) -> Result<(RenderStats, Option<String>), E> {
         use crate::image_io;
-        let (min, max) = depth_range;
         let wants = |output| options.outputs.contains(output);
+        let grey = |as_grey: &dyn Fn(f32, f32) -> Vec<u8>| match depth {
+            DepthAs::Grey { min, max } if wants(Output::Depth) => Some(Rows8::Made(as_grey(min, max))),
+            _ => None,
+        };
+        let distances =
+            |values: &dyn Fn() -> Vec<f32>| (wants(Output::Depth) && depth == DepthAs::Distance).then(values);
         let from_frame = |frame: &Frame| ImageRows {
             rows: frame.height,
             color: wants(Output::Color).then(|| Rows8::Made(image_io::color_image(frame).into_raw())),
             normals: wants(Output::Normals).then(|| Rows8::Made(image_io::normals_image(frame).into_raw())),
-            depth: wants(Output::Depth).then(|| Rows8::Made(image_io::depth_image(frame, min, max).into_raw())),
+            depth: grey(&|min, max| image_io::depth_image(frame, min, max).into_raw()),
+            distances: distances(&|| image_io::depth_values(frame)),
         };
         match self {
             Renderer::Gpu(gpu, fallback) => or_reference(
@@ -304,7 +310,8 @@ impl Renderer {
                             rows: tile.rows,
                             color: wants(Output::Color).then(|| Rows8::Read(tile.color_rows())),
                             normals: wants(Output::Normals).then(|| Rows8::Read(tile.normals_rows())),
-                            depth: wants(Output::Depth).then(|| Rows8::Made(tile.depth_rgb(min, max))),
+                            depth: grey(&|min, max| tile.depth_rgb(min, max)),
+                            distances: distances(&|| tile.depth_values()),
                         };
                         on_tile(tile.first_row, rows).map_err(Attempt::Tile)
                     })
@@ -333,15 +340,26 @@ pub fn fallback_notice(e: &GpuError) -> Option<String> {
     Some(format!("{reason}; rendering with the f64 CPU reference instead"))
 }
 
+/// How [`Renderer::render_images`] hands over the depth: as the grey levels of an 8-bit image
+/// over `min ..= max` (docs/SPEC.md §5), or as the distances themselves (an EXR file).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum DepthAs {
+    Grey { min: f32, max: f32 },
+    Distance,
+}
+
 /// One tile's rows of each 8-bit image asked for, top row first: as the kernel packed them
 /// where the GPU rendered them (a writer reorders them into its file at once), else as
-/// bytes quantised on the host.
+/// bytes quantised on the host; and the depth as [`DepthAs`] asked.
 pub struct ImageRows<'a> {
     /// How many rows the tile has.
     pub rows: u32,
     pub color: Option<Rows8<'a>>,
     pub normals: Option<Rows8<'a>>,
+    /// The depth's grey levels ([`DepthAs::Grey`]).
     pub depth: Option<Rows8<'a>>,
+    /// The hit distances `t`, +∞ where nothing was hit ([`DepthAs::Distance`]).
+    pub distances: Option<Vec<f32>>,
 }
 
 /// An 8-bit image's rows, read back from the device or made on the host.

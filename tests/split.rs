@@ -100,6 +100,46 @@ fn exr_from_the_gpu_is_the_reference_within_f32_tolerance() {
     assert_exr_matches_reference(dir.path(), "plane_and_sphere_perspective.txt", "gpu", 1e-4);
 }
 
+/// A depth EXR written alone, or beside 8-bit images, takes the distances' bits the kernel
+/// packs, not the float frame: it holds the same floats, bit for bit, as the depth EXR of a
+/// render that reads floats back (beside a colour EXR), which the tests above hold to the
+/// reference; with the CPU, the reference's own. Misses are +∞, and negative depths (spheres
+/// behind an orthographic camera) stay negative.
+#[test]
+fn a_depth_exr_beside_8_bit_images_holds_the_float_renders_depths() {
+    let dir = tempfile::tempdir().unwrap();
+    // `others`: flags and file names in the test's folder, beside `-depth 1 2 d.exr`.
+    let depth_of = |backend: &str, others: &[(&str, &str)]| {
+        let depth = dir.path().join("d.exr");
+        let path = |name: &str| dir.path().join(name).to_str().unwrap().to_string();
+        let mut args: Vec<String> = ["-input", &scene("ortho_behind_camera.txt"), "-size", &W.to_string()]
+            .into_iter()
+            .map(String::from)
+            .collect();
+        args.extend([H.to_string(), "--backend".into(), backend.into(), "-depth".into(), "1".into(), "2".into()]);
+        args.push(path("d.exr"));
+        args.extend(others.iter().flat_map(|(flag, name)| [flag.to_string(), path(name)]));
+        check(raycaster(&args.iter().map(String::as_str).collect::<Vec<_>>()));
+        channel(&read_exr(&depth).2, "Z").iter().map(|t| t.to_bits()).collect::<Vec<u32>>()
+    };
+    let loaded = raycaster::scene::load_scene(&common::scenes_dir().join("ortho_behind_camera.txt")).unwrap();
+    let reference = raycaster::cpu::render(&loaded, &RenderOptions::all(W, H));
+    let reference_bits: Vec<u32> = (0..(W * H) as usize)
+        .map(|k| if reference.hit[k] { reference.depth[k].to_bits() } else { f32::INFINITY.to_bits() })
+        .collect();
+    assert_eq!(depth_of("cpu", &[]), reference_bits, "the CPU's depth EXR alone");
+    let eight_bit = [("-output", "c.png"), ("-normals", "n.tga")];
+    assert_eq!(depth_of("cpu", &eight_bit), reference_bits, "the CPU's depth EXR beside 8-bit images");
+    if common::gpu().is_none() {
+        return;
+    }
+    let floats = depth_of("gpu", &[("-output", "c.exr")]);
+    assert!(floats.contains(&f32::INFINITY.to_bits()), "the view has misses");
+    assert!(floats.iter().any(|&t| f32::from_bits(t) < 0.0), "and depths behind the camera");
+    assert_eq!(depth_of("gpu", &[]), floats, "the GPU's depth EXR alone");
+    assert_eq!(depth_of("gpu", &eight_bit), floats, "the GPU's depth EXR beside 8-bit images");
+}
+
 /// An EXR streamed in uneven chunks of rows (not multiples of its 16-row blocks) reads back
 /// what was written.
 #[test]

@@ -13,7 +13,7 @@ use raycaster::image_io::{self, ImageError, ImageFormat};
 use raycaster::metrics::OutputErrors;
 use raycaster::render::RenderStats;
 use raycaster::render::{Output, Outputs, RenderOptions};
-use raycaster::renderer::Renderer;
+use raycaster::renderer::{DepthAs, Renderer};
 use raycaster::sampling::{Sampler, Sampling};
 use raycaster::scene::{self, Scene, SceneError, SceneWarning};
 use std::fmt;
@@ -263,16 +263,25 @@ pub fn render_scene(
         // Only the course's pictures (`-render_samples`, `-render_filter`): no image.
         (RenderStats::default(), None)
     } else if reads_floats(&outputs) {
-        // Floats leave the backend as they are, for the EXR files.
+        // Floats leave the backend as they are, for the EXR files of colour or normals.
         backend.render_band(scene, &options, band.0, band.1, |_first_row, tile| {
             write(tile.height, &mut |o, sink| sink.write(&o.pixels(&tile)))
         })?
     } else {
-        // 8-bit images only: on the GPU the kernel quantises (a fraction of the bytes to
-        // read back, and no float decoding).
-        let depth_range = args.files.depth_range().unwrap_or((0.0, 1.0));
-        backend.render_images(scene, &options, depth_range, band, |_first_row, images| {
-            write(images.rows, &mut |o, sink| sink.write(&Pixels::Rows(images.pixels(o.output))))
+        // 8-bit images and depth: on the GPU the kernel quantises the images and hands over
+        // the distances' bits (a fraction of the bytes to read back, no float decoding).
+        // An 8-bit depth file has its range (OutputFile::list); an EXR holds the distances.
+        let depth = match outputs.iter().find_map(|o| o.depth_range) {
+            Some((min, max)) => DepthAs::Grey { min, max },
+            None => DepthAs::Distance,
+        };
+        backend.render_images(scene, &options, depth, band, |_first_row, mut images| {
+            write(images.rows, &mut |o, sink| match o.output {
+                Output::Depth if depth == DepthAs::Distance => {
+                    sink.write(&Pixels::Float(images.distances.take().expect("the render handed over the depth")))
+                }
+                _ => sink.write(&Pixels::Rows(images.pixels(o.output))),
+            })
         })?
     };
     drop(bar);
@@ -605,10 +614,11 @@ fn precompile_line(line: &str, backend: &Renderer, ahead: &raycaster::gpu::Ahead
     backend.precompile(ahead, &scene, &options_for(&args), !reads_floats(&OutputFile::list(&args.files)));
 }
 
-/// Whether a render writing `outputs` reads floats back (an EXR file among them), else 8-bit
-/// images the kernel quantises.
+/// Whether a render writing `outputs` reads floats back (an EXR file of colour or normals
+/// among them), else 8-bit images the kernel quantises and the distances' own bits (which
+/// a depth EXR holds as they are).
 fn reads_floats(outputs: &[OutputFile]) -> bool {
-    outputs.iter().any(|o| o.format == ImageFormat::Exr)
+    outputs.iter().any(|o| o.format == ImageFormat::Exr && o.output != Output::Depth)
 }
 
 #[cfg(test)]

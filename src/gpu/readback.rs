@@ -85,13 +85,26 @@ impl ReadTile<'_> {
         self.normals_rows().to_vec()
     }
 
+    /// The words of the depth output: the distance `t`'s bits, [`PACKED_MISS`] where
+    /// nothing was hit.
+    fn depth_words(&self) -> impl ExactSizeIterator<Item = u32> + '_ {
+        assert!(self.layout.outputs.contains(Output::Depth), "the tile holds no depth");
+        let slot = self.layout.outputs.contains(Output::Color) as usize
+            + self.layout.outputs.contains(Output::Normals) as usize;
+        self.output_words(slot)
+    }
+
+    /// The hit distances `t` the kernel handed over, as [`crate::image_io::depth_values`]
+    /// gives them from floats: +∞ where nothing was hit (`-depth` as EXR).
+    pub fn depth_values(&self) -> Vec<f32> {
+        self.depth_words().map(|word| if word == PACKED_MISS { f32::INFINITY } else { f32::from_bits(word) }).collect()
+    }
+
     /// 8-bit RGB rows of the depth visualisation; the kernel hands over the distance `t`
     /// and the host quantises it in f64, exactly as [`crate::image_io::depth_image`] does.
     pub fn depth_rgb(&self, min: f32, max: f32) -> Vec<u8> {
-        let slot = self.layout.outputs.contains(Output::Color) as usize
-            + self.layout.outputs.contains(Output::Normals) as usize;
-        let mut out = Vec::with_capacity(self.width as usize * self.rows as usize * 3);
-        for word in self.output_words(slot) {
+        let mut out = Vec::with_capacity(self.pixels() * 3);
+        for word in self.depth_words() {
             let grey =
                 if word == PACKED_MISS { 0 } else { crate::image_io::depth_level(f32::from_bits(word), min, max) };
             out.extend_from_slice(&[grey; 3]);
