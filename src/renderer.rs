@@ -287,18 +287,18 @@ impl Renderer {
     ) -> Result<(RenderStats, Option<String>), E> {
         use crate::image_io;
         let wants = |output| options.outputs.contains(output);
-        let grey = |as_grey: &dyn Fn(f32, f32) -> Vec<u8>| match depth {
-            DepthAs::Grey { min, max } if wants(Output::Depth) => Some(Rows8::Made(as_grey(min, max))),
-            _ => None,
+        // The depth's grey range, or whether its distances are handed over, where it is asked for.
+        let (grey, distances) = match depth {
+            _ if !wants(Output::Depth) => (None, false),
+            DepthAs::Grey { min, max } => (Some((min, max)), false),
+            DepthAs::Distance => (None, true),
         };
-        let distances =
-            |values: &dyn Fn() -> Vec<f32>| (wants(Output::Depth) && depth == DepthAs::Distance).then(values);
         let from_frame = |frame: &Frame| ImageRows {
             rows: frame.height,
             color: wants(Output::Color).then(|| Rows8::Made(image_io::color_image(frame).into_raw())),
             normals: wants(Output::Normals).then(|| Rows8::Made(image_io::normals_image(frame).into_raw())),
-            depth: grey(&|min, max| image_io::depth_image(frame, min, max).into_raw()),
-            distances: distances(&|| image_io::depth_values(frame)),
+            depth: grey.map(|(min, max)| Rows8::Made(image_io::depth_image(frame, min, max).into_raw())),
+            distances: distances.then(|| image_io::depth_values(frame)),
         };
         match self {
             Renderer::Gpu(gpu, fallback) => or_reference(
@@ -310,8 +310,8 @@ impl Renderer {
                             rows: tile.rows,
                             color: wants(Output::Color).then(|| Rows8::Read(tile.color_rows())),
                             normals: wants(Output::Normals).then(|| Rows8::Read(tile.normals_rows())),
-                            depth: grey(&|min, max| tile.depth_rgb(min, max)),
-                            distances: distances(&|| tile.depth_values()),
+                            depth: grey.map(|(min, max)| Rows8::Made(tile.depth_rgb(min, max))),
+                            distances: distances.then(|| tile.depth_values()),
                         };
                         on_tile(tile.first_row, rows).map_err(Attempt::Tile)
                     })
