@@ -140,6 +140,32 @@ impl Bvh {
         Bvh { nodes, order: prims.iter().map(|p| p.index).collect() }
     }
 
+    /// The same tree over primitives that moved: every node's box made again from `bounds`
+    /// (indexed as [`Bvh::build`]'s were), a leaf's from its primitives and an interior
+    /// node's from its two children, which come after it. Which primitives share a leaf
+    /// stays as built, so the tree stays valid (every box holds what is below it) for any
+    /// `bounds`, and only its cost can change: the refitting of Wald, Boulos and Shirley,
+    /// "Ray Tracing Deformable Scenes using Dynamic Bounding Volume Hierarchies" (ACM TOG
+    /// 2007). For a translated scene (the GPU's camera-relative boxes of a moved camera)
+    /// the cost does not change but for rounding. Boxes are unions, exact in f32, so
+    /// refitting with the build's own boxes gives its nodes back bit for bit.
+    pub fn refit(&mut self, bounds: &[Aabb]) {
+        assert_eq!(bounds.len(), self.order.len(), "a refit takes the built primitives' boxes");
+        if self.order.is_empty() {
+            return;
+        }
+        for k in (0..self.nodes.len()).rev() {
+            let node = self.nodes[k];
+            let (first, count) = (node.first as usize, node.count as usize);
+            let boxed = if node.is_leaf() {
+                self.order[first..first + count].iter().fold(Aabb::EMPTY, |b, &p| b.union(&bounds[p as usize]))
+            } else {
+                self.nodes[first].bounds().union(&self.nodes[first + 1].bounds())
+            };
+            self.nodes[k] = BvhNode::new(&boxed, node.first, node.count);
+        }
+    }
+
     /// Expected cost of a random ray through the root box (MacDonald & Booth): the sum over
     /// nodes of P(ray hits node | hits root) = area / root area, times `TRAVERSAL_COST` for an
     /// interior node or `INTERSECTION_COST` × count for a leaf. 0 when the root box has no
@@ -550,6 +576,61 @@ mod tests {
         assert_eq!(bin_index(5.0, 2.0, 3.0), BIN_COUNT - 1, "the maximum goes into the last bin");
         assert_eq!(bin_index(3.5, 2.0, 3.0), BIN_COUNT / 2);
         assert_eq!(bin_index(1.0, 2.0, 3.0), 0, "below the minimum saturates");
+    }
+
+    /// Boxes scattered by a fixed linear congruential generator, some of them flat or points.
+    fn scattered_boxes(count: usize) -> Vec<Aabb> {
+        let mut state = 0x2545_f491_4f6c_dd1d_u64;
+        let mut next = move || {
+            state = state.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
+            (state >> 40) as f32 / (1u64 << 24) as f32
+        };
+        (0..count)
+            .map(|k| {
+                let corner = Vec3::new(next(), next(), next()) * 100.0 - 50.0;
+                let size = if k % 7 == 0 { Vec3::ZERO } else { Vec3::new(next(), next(), 0.0) * 3.0 };
+                Aabb { min: corner, max: corner + size }
+            })
+            .collect()
+    }
+
+    #[test]
+    fn a_refit_with_the_builds_own_boxes_gives_its_nodes_back() {
+        // Enough primitives for the parallel top levels (`append_subtrees`) to take part.
+        for count in [1, 2, 5, 300, 20_000] {
+            let bounds = scattered_boxes(count);
+            let built = Bvh::build(&bounds);
+            let mut refitted = Bvh { nodes: built.nodes.clone(), order: built.order.clone() };
+            refitted.refit(&bounds);
+            assert_eq!(refitted.nodes, built.nodes, "{count} primitives");
+        }
+    }
+
+    #[test]
+    fn a_refit_over_moved_boxes_keeps_the_shape_and_holds_every_primitive() {
+        let bounds = scattered_boxes(3_000);
+        let mut bvh = Bvh::build(&bounds);
+        let shape: Vec<_> = bvh.nodes.iter().map(|n| (n.first, n.count)).collect();
+        let moved: Vec<Aabb> = bounds
+            .iter()
+            .map(|b| Aabb { min: b.min - Vec3::new(1e3, -7.5, 0.1), max: b.max - Vec3::new(1e3, -7.5, 0.1) })
+            .collect();
+        bvh.refit(&moved);
+        assert_eq!(bvh.nodes.iter().map(|n| (n.first, n.count)).collect::<Vec<_>>(), shape);
+        let all = moved.iter().fold(Aabb::EMPTY, |b, m| b.union(m));
+        assert_eq!(bvh.nodes[0].bounds(), all, "the root is the union of every moved box");
+        let holds = |outer: &Aabb, inner: &Aabb| outer.min.cmple(inner.min).all() && inner.max.cmple(outer.max).all();
+        for node in &bvh.nodes {
+            let (first, count) = (node.first as usize, node.count as usize);
+            if node.is_leaf() {
+                for &p in &bvh.order[first..first + count] {
+                    assert!(holds(&node.bounds(), &moved[p as usize]));
+                }
+            } else {
+                assert!(holds(&node.bounds(), &bvh.nodes[first].bounds()));
+                assert!(holds(&node.bounds(), &bvh.nodes[first + 1].bounds()));
+            }
+        }
     }
 
     #[test]
