@@ -91,7 +91,7 @@ impl SceneBuffers {
         grid: Option<GridChoice>,
     ) -> SceneBuffers {
         let mut buffers = SceneBuffers::flattened(scene, rays);
-        buffers.build_acceleration(rays, options, no_bins, sampled, grid);
+        buffers.build_acceleration(rays, options, no_bins, sampled, grid, None);
         buffers
     }
 
@@ -152,7 +152,9 @@ impl SceneBuffers {
     }
 
     /// Builds the grid (`grid`: `-grid`), or else bins, a hierarchy or nothing (flat
-    /// loops), as [`SceneBuffers::new`] says.
+    /// loops), as [`SceneBuffers::new`] says. A hierarchy takes the shape of `shape`, a
+    /// hierarchy of these primitives seen from another camera, refitted
+    /// ([`crate::bvh::Bvh::refit`]) rather than built again, where it has as many.
     pub fn build_acceleration(
         &mut self,
         rays: &PrimaryRays,
@@ -160,12 +162,13 @@ impl SceneBuffers {
         no_bins: bool,
         sampled: bool,
         grid: Option<GridChoice>,
+        shape: Option<&GpuBvh>,
     ) {
         match grid {
             // An explicit grid means the grid (docs/SPEC.md §7).
             Some(GridChoice::Walk(size)) => self.grid = Some(GpuGrid::build(self, size)),
             Some(GridChoice::Given(grid)) => self.grid = Some(grid),
-            None => self.choose_acceleration(rays, options, no_bins, sampled),
+            None => self.choose_acceleration(rays, options, no_bins, sampled, shape),
         }
         if let Some(bvh) = self.bvh.as_ref().filter(|b| b.prim_refs.is_empty()) {
             self.triangles = bvh.order.iter().map(|&p| self.triangles[p as usize]).collect();
@@ -200,7 +203,14 @@ impl SceneBuffers {
     /// Bins, a hierarchy or flat loops: what `options` asks for, or with
     /// [`Acceleration::Auto`] the cost model's choice; with `no_bins`, the hierarchy
     /// where bins were asked for.
-    fn choose_acceleration(&mut self, rays: &PrimaryRays, options: &GpuOptions, no_bins: bool, sampled: bool) {
+    fn choose_acceleration(
+        &mut self,
+        rays: &PrimaryRays,
+        options: &GpuOptions,
+        no_bins: bool,
+        sampled: bool,
+        shape: Option<&GpuBvh>,
+    ) {
         let Some(bins_asked) = self.bins_asked(rays, options, sampled) else { return };
         if bins_asked && !no_bins {
             let candidates = binning::candidates(&self.triangles, &self.sphere_bounds, &self.ellipsoid_bounds);
@@ -214,7 +224,7 @@ impl SceneBuffers {
                 return;
             }
         }
-        self.bvh = self.build_bvh(self.bvh_min_primitives(options));
+        self.bvh = self.build_bvh(self.bvh_min_primitives(options), shape);
     }
 
     /// Whether the finite primitives are triangles alone: then the hierarchy's leaves hold
@@ -258,7 +268,7 @@ impl SceneBuffers {
         (min_primitives.max(1)..=BVH_MAX_PRIMITIVES).contains(&self.finite())
     }
 
-    fn build_bvh(&self, min_primitives: usize) -> Option<GpuBvh> {
+    fn build_bvh(&self, min_primitives: usize, shape: Option<&GpuBvh>) -> Option<GpuBvh> {
         if !self.holds_a_hierarchy(min_primitives) {
             return None;
         }
@@ -278,7 +288,14 @@ impl SceneBuffers {
             bounds.push(*b);
             refs.push(PrimitiveKind::Ellipsoid.reference(k));
         }
-        let bvh = Bvh::build(&bounds);
+        let bvh = match shape.filter(|s| s.order.len() == finite) {
+            Some(shape) => {
+                let mut kept = Bvh { nodes: shape.nodes.clone(), order: shape.order.clone() };
+                kept.refit(&bounds);
+                kept
+            }
+            None => Bvh::build(&bounds),
+        };
         let prim_refs = if self.triangles_alone() {
             // Triangles alone: the kernel reads them in leaf order directly (see `leaf_slot`).
             Vec::new()

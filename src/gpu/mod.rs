@@ -13,12 +13,14 @@
 //! kernel's bindings, by name); `kernel` (its configuration); `renderer` (the device and
 //! its compiled kernels); `upload`, `tiles`, `dispatch` and `readback` (a scene's buffers,
 //! its tiles in flight, a tile's dispatch, what the host reads back); `handover` (pixels
-//! given to the reference); `prepared` (a scene made ready) and `tile_loop` (its tiles
-//! rendered, on a thread of ours or awaited in a browser); `present` (its tiles drawn onto
+//! given to the reference); `prepared` (a scene made ready), `aim` (the same scene pointed
+//! at a moved camera without preparing it again) and `tile_loop` (its tiles rendered, on a
+//! thread of ours or awaited in a browser); `present` (its tiles drawn onto
 //! a texture on the device, for the live window); `first_dispatch` and `ahead` (a batch's
 //! next kernels compiled ahead, on lavapipe on twin devices).
 
 mod ahead;
+mod aim;
 mod bindings;
 pub mod binning;
 mod dispatch;
@@ -55,6 +57,7 @@ pub mod voxels;
 mod workgroup;
 
 pub use ahead::Ahead;
+pub use aim::Aimed;
 pub use bindings::Binding;
 pub use error::GpuError;
 pub use kernel::{KernelConfig, Stage, SHARED_KERNEL_MAX_SAMPLES};

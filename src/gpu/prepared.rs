@@ -11,7 +11,7 @@
 use super::binning::Bins;
 use super::dispatch::Dispatch;
 use super::error::GpuError;
-use super::flatten::{self, GridChoice, SceneBuffers};
+use super::flatten::{self, GpuBvh, GridChoice, SceneBuffers};
 use super::kernel::{KernelConfig, KernelKey};
 use super::layout::{GpuTexture, Params, PixelLayout, SWITCH_ORTHOGRAPHIC, SWITCH_SHADE_BACK, SWITCH_TRIANGLES_ALONE};
 use super::parallel::in_parallel;
@@ -38,6 +38,28 @@ pub struct PreparedScene<'a> {
     /// The kernel the tiles dispatch first (`gpu::ahead`, which a browser does without).
     #[cfg_attr(target_arch = "wasm32", allow(dead_code))]
     pub(super) first_kernel: KernelKey,
+    /// What another camera may keep ([`PreparedScene::aim`]).
+    pub(super) kept: Kept,
+}
+
+/// How much room the slots' buffers give the bins' lists.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum ListsRoom {
+    /// What this camera's lists need: a render of one image.
+    Exact,
+    /// Twice that (within the adapter's binding limit), for the lists of the cameras to
+    /// come: a scene prepared again because a moved camera's lists outgrew its slots
+    /// ([`PreparedScene::aim`]).
+    Doubled,
+}
+
+/// What a prepared scene keeps for [`PreparedScene::aim`]: its kernel's configuration, the
+/// scene's buffers and the sizes of the slots', and the hierarchy's shape.
+pub(super) struct Kept {
+    pub config: KernelConfig,
+    pub inputs: Inputs,
+    pub sizes: SlotSizes,
+    pub shape: Option<GpuBvh>,
 }
 
 impl GpuRenderer {
@@ -65,16 +87,17 @@ impl GpuRenderer {
     /// result renders the image tile by tile. `packed` asks for the outputs as 8-bit images
     /// (one word per pixel and output, quantised by the kernel), else as floats.
     pub fn prepare(&self, scene: &Scene, options: &RenderOptions, packed: bool) -> Result<PreparedScene<'_>, GpuError> {
-        PreparedScene::new(self, scene, options, PixelLayout::new(options, packed))
+        PreparedScene::new(self, scene, options, PixelLayout::new(options, packed), ListsRoom::Exact)
     }
 }
 
 impl<'a> PreparedScene<'a> {
-    fn new(
+    pub(super) fn new(
         gpu: &'a GpuRenderer,
         scene: &Scene,
         options: &RenderOptions,
         layout: PixelLayout,
+        room: ListsRoom,
     ) -> Result<PreparedScene<'a>, GpuError> {
         let start = crate::clock::Instant::now();
         let Planned { traced, mut plan, mut buffers, config: planned } = Planned::new(gpu, scene, options, layout)?;
@@ -91,7 +114,7 @@ impl<'a> PreparedScene<'a> {
                 Compiled::new(gpu, planned, options, &scene.path).map(|c| (c, compiling.elapsed().as_secs_f64() * 1e3))
             },
             || {
-                let uploaded = Uploaded::new(gpu, scene, options, layout, &mut buffers, &mut plan)?;
+                let uploaded = Uploaded::new(gpu, scene, options, (layout, room), &mut buffers, &mut plan)?;
                 let config = config_for(&buffers, buffers.acceleration());
                 let unplanned = (config != planned).then(|| Compiled::new(gpu, config, options, &scene.path));
                 Ok::<_, GpuError>((config, unplanned, uploaded))
@@ -117,20 +140,31 @@ impl<'a> PreparedScene<'a> {
             grid_bounds: options.stats.then(|| buffers.grid_world_bounds(plan.rays.center)).flatten(),
             ..uploaded.stats(&buffers)
         };
-        let params = Params {
-            weight: options.shading.weight as f32,
-            bounces: traced.tree.depth,
-            switches: switches(&buffers, options.shading.shade_back),
-            ..buffers.params
-        };
-        let dispatch = uploaded.dispatch(gpu, compiled, &counters, &mut buffers, (config, params), options, layout);
+        let params = frame_params(&buffers, options, &traced);
+        let (dispatch, inputs, sizes) =
+            uploaded.dispatch(gpu, compiled, &counters, &mut buffers, (config, params), options, layout);
         Ok(PreparedScene {
             dispatch,
             stats: RenderStats { prepare_ms: start.elapsed().as_secs_f64() * 1e3, ..stats },
             fallback: config.may_hand_over().then(|| scene.clone()),
             counters,
             first_kernel,
+            kept: Kept { config, inputs, sizes, shape: buffers.bvh.take() },
         })
+    }
+}
+
+/// The parameters every tile of a frame of `buffers` shares.
+pub(super) fn frame_params(
+    buffers: &SceneBuffers,
+    options: &RenderOptions,
+    traced: &super::ray_tree::RenderRays,
+) -> Params {
+    Params {
+        weight: options.shading.weight as f32,
+        bounces: traced.tree.depth,
+        switches: switches(buffers, options.shading.shade_back),
+        ..buffers.params
     }
 }
 
@@ -144,15 +178,15 @@ fn switches(buffers: &SceneBuffers, shade_back: bool) -> u32 {
 
 /// A render checked, planned and flattened, and the kernel of its plan: what
 /// [`GpuRenderer::precompile`] compiles and [`PreparedScene::new`] starts from.
-struct Planned {
-    traced: super::ray_tree::RenderRays,
-    plan: Plan,
-    buffers: SceneBuffers,
-    config: KernelConfig,
+pub(super) struct Planned {
+    pub traced: super::ray_tree::RenderRays,
+    pub plan: Plan,
+    pub buffers: SceneBuffers,
+    pub config: KernelConfig,
 }
 
 impl Planned {
-    fn new(
+    pub fn new(
         gpu: &GpuRenderer,
         scene: &Scene,
         options: &RenderOptions,
@@ -170,7 +204,7 @@ impl Planned {
 }
 
 /// The kernel for `buffers` on `gpu`, finding candidates by `acceleration`.
-fn kernel_config(
+pub(super) fn kernel_config(
     gpu: &GpuRenderer,
     buffers: &SceneBuffers,
     acceleration: super::Acceleration,
@@ -188,8 +222,8 @@ fn kernel_config(
 }
 
 /// What a scene's render casts, and where it finds its candidates.
-struct Plan {
-    rays: crate::camera::PrimaryRays,
+pub(super) struct Plan {
+    pub rays: crate::camera::PrimaryRays,
     secondary_rays: bool,
     sampled_rays: bool,
     grid: Option<GridChoice>,
@@ -211,9 +245,11 @@ impl Plan {
         buffers.planned_acceleration(&self.rays, options, self.secondary_rays, self.sampled_rays, self.grid.is_some())
     }
 
-    /// Builds the grid (handed over: built once), the bins or the hierarchy into `buffers`.
-    fn build(&mut self, buffers: &mut SceneBuffers, options: &super::GpuOptions) {
-        buffers.build_acceleration(&self.rays, options, self.secondary_rays, self.sampled_rays, self.grid.take());
+    /// Builds the grid (handed over: built once), the bins or the hierarchy into `buffers`;
+    /// a hierarchy in the shape of `shape` where given ([`SceneBuffers::build_acceleration`]).
+    pub fn build(&mut self, buffers: &mut SceneBuffers, options: &super::GpuOptions, shape: Option<&GpuBvh>) {
+        let grid = self.grid.take();
+        buffers.build_acceleration(&self.rays, options, self.secondary_rays, self.sampled_rays, grid, shape);
     }
 }
 
@@ -230,10 +266,25 @@ fn flattened(scene: &Scene, options: &RenderOptions, rays: &crate::camera::Prima
     buffers
 }
 
+/// Refuses flat loops (no bins, hierarchy or grid) over more primitives than a loop may
+/// run on a driver that ends long loops.
+pub(super) fn check_flat_loops(buffers: &SceneBuffers) -> Result<(), GpuError> {
+    let flat = buffers.bins.is_none() && buffers.bvh.is_none() && buffers.grid.is_none();
+    let primitives = buffers.spheres.len() + buffers.ellipsoids.len() + buffers.planes.len() + buffers.triangles.len();
+    if flat && primitives > flatten::LOOP_LIMIT as usize / 2 {
+        return Err(GpuError::TooLarge(format!(
+            "{primitives} primitives in flat loops (at most {} without bins or a hierarchy)",
+            flatten::LOOP_LIMIT / 2
+        )));
+    }
+    Ok(())
+}
+
 /// A scene's buffers on the device: the inputs, and the buffers of each tile slot.
 struct Uploaded {
     tiling: Tiling,
     inputs: Inputs,
+    sizes: SlotSizes,
     slot_buffers: Vec<TileBuffers>,
 }
 
@@ -243,20 +294,12 @@ impl Uploaded {
         gpu: &GpuRenderer,
         scene: &Scene,
         options: &RenderOptions,
-        layout: PixelLayout,
+        (layout, room): (PixelLayout, ListsRoom),
         buffers: &mut SceneBuffers,
         plan: &mut Plan,
     ) -> Result<Uploaded, GpuError> {
-        plan.build(buffers, &gpu.options);
-        let flat = buffers.bins.is_none() && buffers.bvh.is_none() && buffers.grid.is_none();
-        let primitives =
-            buffers.spheres.len() + buffers.ellipsoids.len() + buffers.planes.len() + buffers.triangles.len();
-        if flat && primitives > flatten::LOOP_LIMIT as usize / 2 {
-            return Err(GpuError::TooLarge(format!(
-                "{primitives} primitives in flat loops (at most {} without bins or a hierarchy)",
-                flatten::LOOP_LIMIT / 2
-            )));
-        }
+        plan.build(buffers, &gpu.options, None);
+        check_flat_loops(buffers)?;
         let tiling = Tiling::new(gpu, scene, options, &layout, buffers.bins.as_ref())?;
         if let Some(bins) = &mut buffers.bins {
             bins.finish(&buffers.triangles);
@@ -270,17 +313,22 @@ impl Uploaded {
             (first, count, bins.band(first, count))
         });
         let tile_bytes = options.width as u64 * tiling.tile_rows as u64 * layout.words() as u64 * 4;
-        let sizes = SlotSizes { tile_bytes, sample_bytes: tiling.sample_bytes, band_bytes: tiling.band_bytes };
+        let limit = gpu.limits.max_storage_buffer_binding_size;
+        let band_bytes = tiling.band_bytes.map(|(ranges, items)| match room {
+            ListsRoom::Exact => (ranges, items),
+            ListsRoom::Doubled => (ranges, (2 * items).min(limit.max(items))),
+        });
+        let sizes = SlotSizes { tile_bytes, sample_bytes: tiling.sample_bytes, band_bytes };
         let slots = options.height.div_ceil(tiling.tile_rows).min(gpu.options.tile_slots.max(1) as u32);
         let slot_buffers = (0..slots)
             .map(|k| TileBuffers::new(gpu, sizes, first_band.as_ref().filter(|_| k == 0)))
             .collect::<Result<_, _>>()?;
-        Ok(Uploaded { tiling, inputs, slot_buffers })
+        Ok(Uploaded { tiling, inputs, sizes, slot_buffers })
     }
 
     /// What the preparation cost in memory and in building the acceleration.
     fn stats(&self, buffers: &SceneBuffers) -> RenderStats {
-        let band_buffer_bytes = self.tiling.band_bytes.map_or(0, |(r, i)| r + i) * self.slot_buffers.len() as u64;
+        let band_buffer_bytes = self.sizes.band_bytes.map_or(0, |(r, i)| r + i) * self.slot_buffers.len() as u64;
         let scene_bytes = self.inputs.0.iter().flatten().map(|b| b.size()).sum::<u64>() + band_buffer_bytes;
         let acceleration_build_ms = buffers
             .bvh
@@ -297,7 +345,8 @@ impl Uploaded {
     }
 
     /// The tiles' dispatch: each slot bound to the kernel `compiled` (of `config`, with
-    /// `params`), the inputs and the counters; the frame's bins taken from `buffers`.
+    /// `params`), the inputs and the counters; the frame's bins taken from `buffers`. The
+    /// inputs and the slots' sizes come back beside it, for a moved camera to reuse.
     #[allow(clippy::too_many_arguments)]
     fn dispatch<'a>(
         self,
@@ -308,14 +357,14 @@ impl Uploaded {
         (config, params): (KernelConfig, Params),
         options: &RenderOptions,
         layout: PixelLayout,
-    ) -> Dispatch<'a> {
+    ) -> (Dispatch<'a>, Inputs, SlotSizes) {
         let Compiled { bindings, pipeline, sampled, .. } = compiled;
         let slots = self
             .slot_buffers
             .into_iter()
             .map(|b| TileSlot::new(gpu, b, &bindings, &self.inputs, &counters.buffer))
             .collect();
-        Dispatch {
+        let dispatch = Dispatch {
             gpu,
             pipeline,
             sampled,
@@ -327,6 +376,7 @@ impl Uploaded {
             slots,
             bins: buffers.bins.take(),
             lists_ns: Default::default(),
-        }
+        };
+        (dispatch, self.inputs, self.sizes)
     }
 }

@@ -89,6 +89,17 @@ impl Tiling {
         Ok(Tiling { tile_rows, sample_bytes, band_bytes })
     }
 
+    /// Whether tiles cut this way fit the slots of a render cut into `tile_rows` rows with
+    /// buffers of `sizes`: the same rows, no more samples nor longer lists.
+    pub fn fits(&self, tile_rows: u32, sizes: SlotSizes) -> bool {
+        let lists_fit = match (self.band_bytes, sizes.band_bytes) {
+            (Some((ranges, items)), Some((room_ranges, room_items))) => ranges <= room_ranges && items <= room_items,
+            (None, None) => true,
+            _ => false,
+        };
+        self.tile_rows == tile_rows && self.sample_bytes <= sizes.sample_bytes && lists_fit
+    }
+
     /// The rows the first tile of a whole image traces (a band of a split render may start
     /// lower): those `Dispatch::traced_rows` gives it.
     pub fn first_traced_rows(&self, options: &RenderOptions) -> u32 {

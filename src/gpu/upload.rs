@@ -1,5 +1,6 @@
 //! Uploading a scene's buffers: the kernel's read-only inputs, checked finite and within the
-//! adapter's limits, written in place where the host maps them.
+//! adapter's limits, written in place where the host maps them, and written again into the
+//! same buffers for a moved camera (`gpu::aim`).
 
 use super::bindings::{Binding, PerBinding};
 use super::error::GpuError;
@@ -15,11 +16,48 @@ pub(super) type Inputs = PerBinding<Option<wgpu::Buffer>>;
 
 /// The scene's read-only buffers, uploaded.
 pub(super) fn upload_inputs(gpu: &GpuRenderer, buffers: &SceneBuffers) -> Result<Inputs, GpuError> {
-    let limit = gpu.limits.max_storage_buffer_binding_size;
     // Written in place where the host maps the kernel's buffers: else through a staging
-    // buffer, which the device copies before the first tile.
-    let maps = gpu.maps_kernel_buffers();
+    // buffer, which the device copies before the first tile. Either way a moved camera may
+    // write them again (`rewrite_inputs`).
+    let usage = match gpu.maps_kernel_buffers() {
+        true => wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_WRITE,
+        false => wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+    };
     let mut out = PerBinding(Default::default());
+    for (binding, bytes) in checked_contents(gpu, buffers)? {
+        out.0[binding as usize] = Some(gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(binding.name()),
+            contents: bytes,
+            usage,
+        }));
+    }
+    Ok(out)
+}
+
+/// Writes `buffers` into the scene's buffers `inputs`, uploaded before for the same
+/// bindings, where each fits in its buffer; else writes nothing and returns false, for the
+/// caller to upload them afresh. (The kernel reads only as many elements as `Params`
+/// counts, so a buffer larger than its contents is fine.)
+pub(super) fn rewrite_inputs(gpu: &GpuRenderer, inputs: &Inputs, buffers: &SceneBuffers) -> Result<bool, GpuError> {
+    let contents = checked_contents(gpu, buffers)?;
+    let fits =
+        |&(binding, bytes): &(Binding, &[u8])| inputs[binding].as_ref().is_some_and(|b| bytes.len() as u64 <= b.size());
+    let uploaded = inputs.0.iter().filter(|b| b.is_some()).count();
+    if contents.len() != uploaded || !contents.iter().all(fits) {
+        return Ok(false);
+    }
+    for (binding, bytes) in contents {
+        let buffer = inputs[binding].as_ref().expect("checked above");
+        gpu.queue.write_buffer(buffer, 0, bytes);
+    }
+    Ok(true)
+}
+
+/// Each input binding's bytes ([`contents`]), checked finite and within the adapter's
+/// storage binding limit.
+fn checked_contents<'b>(gpu: &GpuRenderer, buffers: &'b SceneBuffers) -> Result<Vec<(Binding, &'b [u8])>, GpuError> {
+    let limit = gpu.limits.max_storage_buffer_binding_size;
+    let mut out = Vec::new();
     for binding in Binding::ALL {
         let Some(bytes) = contents(buffers, binding) else { continue };
         let name = binding.name();
@@ -34,15 +72,7 @@ pub(super) fn upload_inputs(gpu: &GpuRenderer, buffers: &SceneBuffers) -> Result
                 bytes.len()
             )));
         }
-        out.0[binding as usize] = Some(gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some(name),
-            contents: bytes,
-            usage: if maps {
-                wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::MAP_WRITE
-            } else {
-                wgpu::BufferUsages::STORAGE
-            },
-        }));
+        out.push((binding, bytes));
     }
     Ok(out)
 }

@@ -1,0 +1,77 @@
+//! A prepared scene pointed at another camera: what the live view does between frames, and
+//! `bench`'s moving frames, instead of preparing the scene again (docs/SPEC.md §6, "A
+//! camera moved").
+//!
+//! The kernel's values are camera-relative (docs/SPEC.md §6), so a moved camera moves every
+//! primitive, every box and every bin: the scene is checked (the precision contract is the
+//! new camera's), flattened and its bins built again, and written into the buffers it
+//! already has. What stays is the rest of preparing: the kernel (compiled or looked up),
+//! the buffers and their bindings, the tile slots, and the hierarchy's shape, whose boxes
+//! are refitted ([`crate::bvh::Bvh::refit`]) instead of built again. A camera that changes
+//! more (another kernel, lists longer than the slots hold, a larger buffer) prepares the
+//! scene again, so an aimed scene renders what a scene prepared for that camera renders:
+//! the same hits, but where two primitives meet a ray at exactly one distance and the kept
+//! hierarchy visits the other first.
+
+use super::error::GpuError;
+use super::prepared::{check_flat_loops, frame_params, kernel_config, ListsRoom, Planned, PreparedScene};
+use super::tiles::Tiling;
+use super::upload::rewrite_inputs;
+use crate::render::RenderStats;
+use crate::scene::Scene;
+
+/// How [`PreparedScene::aim`] met the new camera.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Aimed {
+    /// The scene's buffers written in place: no kernel, buffer or binding made.
+    InPlace,
+    /// Prepared again, as [`super::GpuRenderer::prepare`] prepares: the camera changed the
+    /// kernel, or outgrew a buffer.
+    Prepared,
+}
+
+impl<'a> PreparedScene<'a> {
+    /// Points the scene at `scene`'s camera: `scene` is the scene this was prepared for,
+    /// its camera moved, rendered with the same options. Refuses what
+    /// [`super::GpuRenderer::prepare`] refuses for that camera (a sphere too far from it,
+    /// `gpu::precision`), and then leaves the scene as it was.
+    pub fn aim(&mut self, scene: &Scene) -> Result<Aimed, GpuError> {
+        let start = crate::clock::Instant::now();
+        let gpu: &'a super::GpuRenderer = self.dispatch.gpu;
+        let (options, layout) = (self.dispatch.options, self.dispatch.layout);
+        let Planned { traced, mut plan, mut buffers, .. } = Planned::new(gpu, scene, &options, layout)?;
+        plan.build(&mut buffers, &gpu.options, self.kept.shape.as_ref());
+        check_flat_loops(&buffers)?;
+        let config = kernel_config(gpu, &buffers, buffers.acceleration(), layout, &options, &traced);
+        let tiling = Tiling::new(gpu, scene, &options, &layout, buffers.bins.as_ref())?;
+        if let Some(bins) = &mut buffers.bins {
+            bins.finish(&buffers.triangles);
+        }
+        let same_kernel_and_slots = config == self.kept.config && tiling.fits(self.dispatch.tile_rows, self.kept.sizes);
+        if !same_kernel_and_slots || !rewrite_inputs(gpu, &self.kept.inputs, &buffers)? {
+            // A camera that moves on is likely to outgrow lists again: where the scene has
+            // bins, the slots made again give its lists room to grow.
+            *self = PreparedScene::new(gpu, scene, &options, layout, ListsRoom::Doubled)?;
+            return Ok(Aimed::Prepared);
+        }
+        let built_ms = [buffers.bvh.as_ref().map(|b| b.build_ms), buffers.bins.as_ref().map(|b| b.build_ms)];
+        self.stats = RenderStats {
+            kernel_ns: gpu.timestamps.then_some(0),
+            grid_bounds: options.stats.then(|| buffers.grid_world_bounds(plan.rays.center)).flatten(),
+            acceleration_build_ms: built_ms.into_iter().flatten().next().or(buffers.grid.as_ref().map(|g| g.build_ms)),
+            scene_bytes: self.stats.scene_bytes,
+            acceleration: buffers.acceleration(),
+            prepare_ms: start.elapsed().as_secs_f64() * 1e3,
+            ..RenderStats::default()
+        };
+        self.dispatch.params = frame_params(&buffers, &options, &traced);
+        self.dispatch.bins = buffers.bins.take();
+        // Every slot's lists are the old camera's.
+        for band in self.dispatch.slots.iter().filter_map(|slot| slot.buffers.bins.as_ref()) {
+            *band.holds.lock().unwrap_or_else(|e| e.into_inner()) = None;
+        }
+        self.fallback = config.may_hand_over().then(|| scene.clone());
+        self.kept.shape = buffers.bvh.take();
+        Ok(Aimed::InPlace)
+    }
+}
