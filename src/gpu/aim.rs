@@ -13,6 +13,7 @@
 //! the same hits, but where two primitives meet a ray at exactly one distance and the kept
 //! hierarchy visits the other first.
 
+use super::dispatch::Dispatch;
 use super::error::GpuError;
 use super::prepared::{check_flat_loops, frame_params, kernel_config, ListsRoom, Planned, PreparedScene};
 use super::tiles::Tiling;
@@ -73,5 +74,44 @@ impl<'a> PreparedScene<'a> {
         self.fallback = config.may_hand_over().then(|| scene.clone());
         self.kept.shape = buffers.bvh.take();
         Ok(Aimed::InPlace)
+    }
+}
+
+/// A prepared scene set apart from the renderer it was prepared on, for a caller that keeps
+/// it between frames but cannot keep the borrow (the live view, whose window owns its
+/// renderer): [`PreparedScene::detach`], then [`DetachedScene::attach`] to render or aim it.
+pub struct DetachedScene {
+    /// The tiles' kernels, buffers and bins, on the device that made them.
+    dispatch: Dispatch<wgpu::Device>,
+    stats: RenderStats,
+    fallback: Option<Scene>,
+    counters: super::readback::Counters,
+    first_kernel: super::kernel::KernelKey,
+    kept: super::prepared::Kept,
+}
+
+impl PreparedScene<'_> {
+    /// The scene apart from its renderer, its buffers and kernel kept.
+    pub fn detach(self) -> DetachedScene {
+        let PreparedScene { dispatch, stats, fallback, counters, first_kernel, kept } = self;
+        let device = dispatch.gpu.device.clone();
+        DetachedScene { dispatch: dispatch.on(device), stats, fallback, counters, first_kernel, kept }
+    }
+}
+
+impl DetachedScene {
+    /// The outputs and size the scene was prepared for.
+    pub fn options(&self) -> &crate::render::RenderOptions {
+        &self.dispatch.options
+    }
+
+    /// The scene on `gpu` again, or `None` where `gpu` renders on another device than the
+    /// one it was prepared on, whose buffers and kernel it cannot use.
+    pub fn attach(self, gpu: &super::GpuRenderer) -> Option<PreparedScene<'_>> {
+        if gpu.device != self.dispatch.gpu {
+            return None;
+        }
+        let DetachedScene { dispatch, stats, fallback, counters, first_kernel, kept } = self;
+        Some(PreparedScene { dispatch: dispatch.on(gpu), stats, fallback, counters, first_kernel, kept })
     }
 }

@@ -11,9 +11,10 @@ use crate::render::RenderOptions;
 use {super::error::GpuError, super::readback::map_and_wait};
 
 /// What renders a prepared scene's tiles: its kernels, the slots of per-tile buffers that
-/// take turns, and the frame's bins.
-pub(super) struct Dispatch<'a> {
-    pub gpu: &'a GpuRenderer,
+/// take turns, and the frame's bins, on `gpu`: a renderer (`&GpuRenderer`), or while the
+/// scene is set apart from it the device they belong to (`gpu::aim::DetachedScene`).
+pub(super) struct Dispatch<G> {
+    pub gpu: G,
     /// The kernel of a render without sampling (`sampled` holds the others).
     pub pipeline: Option<wgpu::ComputePipeline>,
     /// With sampling: the passes that trace the samples and filter them.
@@ -34,7 +35,26 @@ pub(super) struct Dispatch<'a> {
     pub lists_ns: std::sync::atomic::AtomicU64,
 }
 
-impl Dispatch<'_> {
+impl<G> Dispatch<G> {
+    /// The same tiles on `gpu` instead.
+    pub fn on<H>(self, gpu: H) -> Dispatch<H> {
+        Dispatch {
+            gpu,
+            pipeline: self.pipeline,
+            sampled: self.sampled,
+            packet: self.packet,
+            layout: self.layout,
+            params: self.params,
+            options: self.options,
+            tile_rows: self.tile_rows,
+            slots: self.slots,
+            bins: self.bins,
+            lists_ns: self.lists_ns,
+        }
+    }
+}
+
+impl Dispatch<&GpuRenderer> {
     pub fn tile_bytes(&self, rows: u32) -> u64 {
         self.options.width as u64 * rows as u64 * self.layout.words() as u64 * 4
     }

@@ -57,7 +57,7 @@ pub mod voxels;
 mod workgroup;
 
 pub use ahead::Ahead;
-pub use aim::Aimed;
+pub use aim::{Aimed, DetachedScene};
 pub use bindings::Binding;
 pub use error::GpuError;
 pub use kernel::{KernelConfig, Stage, SHARED_KERNEL_MAX_SAMPLES};

@@ -27,7 +27,7 @@ use crate::scene::Scene;
 /// A scene ready on the device for one image size and set of outputs.
 pub struct PreparedScene<'a> {
     /// The kernels, the per-tile buffers and the frame's bins, which render the tiles.
-    pub(super) dispatch: Dispatch<'a>,
+    pub(super) dispatch: Dispatch<&'a GpuRenderer>,
     pub(super) stats: RenderStats,
     /// The scene, kept where the kernel may hand pixels over
     /// ([`KernelConfig::may_hand_over`]), to render those with the reference
@@ -357,7 +357,7 @@ impl Uploaded {
         (config, params): (KernelConfig, Params),
         options: &RenderOptions,
         layout: PixelLayout,
-    ) -> (Dispatch<'a>, Inputs, SlotSizes) {
+    ) -> (Dispatch<&'a GpuRenderer>, Inputs, SlotSizes) {
         let Compiled { bindings, pipeline, sampled, .. } = compiled;
         let slots = self
             .slot_buffers

@@ -18,7 +18,7 @@ use crate::app::exit::{say, Failure};
 use crate::app::job;
 use orbit::Orbit;
 use present::Screen;
-use raycaster::gpu::{GpuRenderer, Presented};
+use raycaster::gpu::{DetachedScene, GpuRenderer, PreparedScene, Presented};
 use raycaster::image_io;
 use raycaster::render::{Output, Outputs, RenderOptions};
 use raycaster::renderer::Renderer;
@@ -42,6 +42,10 @@ const SETTLE: Duration = Duration::from_millis(150);
 /// The time a frame may take while the camera moves: the view renders at a fraction of its
 /// size, chosen from the last full frame, to stay near it.
 const MOVING_FRAME: Duration = Duration::from_millis(33);
+
+/// Scenes kept prepared between frames, one per size and output (the full size, and the
+/// moving frames' sizes), the least recently drawn given up first.
+const KEPT_SCENES: usize = 3;
 
 /// How a `-gui` line ended.
 pub enum Shown {
@@ -114,6 +118,10 @@ struct LiveView<'a> {
     /// Whether the kernel of the frames rendered while moving has been compiled.
     warmed: bool,
     timings: Timings,
+    /// The scenes prepared for earlier frames, which the next frame of the same size and
+    /// output aims at its camera instead of preparing the scene again
+    /// ([`PreparedScene::aim`]).
+    kept: Vec<DetachedScene>,
     ended: Option<Ended>,
 }
 
@@ -138,6 +146,7 @@ impl<'a> LiveView<'a> {
             scales_seen: Vec::new(),
             warmed: false,
             timings: Timings::default(),
+            kept: Vec::new(),
             ended: None,
         }
     }
@@ -171,7 +180,8 @@ impl<'a> LiveView<'a> {
         let (w, h) = (width.div_ceil(scale), height.div_ceil(scale));
         let start = Instant::now();
         let Some(frame) = screen.next_texture() else { return Ok(()) };
-        let on_device = draw_on_device(screen, backend, &self.scene, self.args, self.output, scale, &frame)?;
+        let view = (self.args, self.output, scale);
+        let on_device = draw_on_device(screen, backend, &mut self.kept, &self.scene, view, &frame)?;
         if !on_device {
             let rgb = render_view(backend, &self.scene, self.args, self.output, (w, h))?;
             screen.write(&frame, &enlarge(&rgb, w, scale, (width, height)));
@@ -411,25 +421,45 @@ fn device_drawn<'r>(backend: &'r Renderer, scene: &Scene, options: &RenderOption
 /// device, without the pixels crossing to the host; returns false where it cannot (the
 /// reference renders the scene, [`device_drawn`]; the GPU refuses it, which the host's
 /// path then reports or hands to the reference; or a pixel was handed over to the
-/// reference), for the caller to draw the frame from the host.
+/// reference), for the caller to draw the frame from the host. The scene prepared for it
+/// is kept in `kept` for the next frame of its size and output.
 fn draw_on_device(
     screen: &Screen,
     backend: &Renderer,
+    kept: &mut Vec<DetachedScene>,
     scene: &Scene,
-    args: &RenderArgs,
-    output: Output,
-    scale: u32,
+    (args, output, scale): (&RenderArgs, Output, u32),
     frame: &wgpu::SurfaceTexture,
 ) -> Result<bool, Failure> {
     let (width, height) = screen.size();
     let options = view_options(args, output, (width.div_ceil(scale), height.div_ceil(scale)));
     let Some(gpu) = device_drawn(backend, scene, &options) else { return Ok(false) };
-    let Ok(prepared) = gpu.prepare(scene, &options, true) else { return Ok(false) };
+    let Some(prepared) = aimed_or_prepared(gpu, kept, scene, &options) else { return Ok(false) };
     let presented = match output {
         Output::Depth => prepared.present_depth(screen.presenter(), &frame.texture, scale, args.files.depth_range())?,
         _ => prepared.present(screen.presenter(), &frame.texture, scale)?,
     };
+    if kept.len() == KEPT_SCENES {
+        kept.remove(0);
+    }
+    kept.push(prepared.detach());
     Ok(presented == Presented::Drawn)
+}
+
+/// `scene` prepared on `gpu` for `options` as 8-bit pixels: the one `kept` for an earlier
+/// frame of these options, aimed at the scene's camera, or else prepared afresh; `None`
+/// where the GPU refuses the scene from this camera.
+fn aimed_or_prepared<'g>(
+    gpu: &'g GpuRenderer,
+    kept: &mut Vec<DetachedScene>,
+    scene: &Scene,
+    options: &RenderOptions,
+) -> Option<PreparedScene<'g>> {
+    let earlier = kept.iter().position(|k| k.options() == options).map(|k| kept.remove(k));
+    match earlier.and_then(|k| k.attach(gpu)) {
+        Some(mut prepared) => prepared.aim(scene).ok().map(|_| prepared),
+        None => gpu.prepare(scene, options, true).ok(),
+    }
 }
 
 /// One output of `scene` at `size`, as the 8-bit RGB bytes its file would hold. Depth is
