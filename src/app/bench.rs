@@ -11,7 +11,7 @@ use crate::app::memory;
 use glam::DVec3;
 use raycaster::cpu::Reference;
 use raycaster::gpu::ray_tree::RenderRays;
-use raycaster::gpu::{Acceleration, GpuError, GpuOptions, GpuRenderer, ReadTile};
+use raycaster::gpu::{Acceleration, GpuError, GpuOptions, GpuRenderer, PreparedScene, ReadTile};
 use raycaster::grid::GridSize;
 use raycaster::metrics::{compare_frames, depth_range_of, OutputErrors};
 use raycaster::render::{Frame, Output, Pixel, RenderOptions, Shading, TriangleTest};
@@ -88,6 +88,9 @@ pub struct Row {
     /// A warm frame of the colour alone as 8-bit RGB, quantised by the kernel (what
     /// `-output` writes and the live view shows; [`warm_rgb8_frame_ms`]).
     pub warm_rgb8_ms: f64,
+    /// [`Row::warm_rgb8_ms`] with the camera turned a little each frame, the scene aimed at
+    /// it rather than prepared again ([`moving_rgb8_frame_ms`]): the live view's orbit.
+    pub moving_rgb8_ms: f64,
     pub runs: usize,
     /// Peak resident memory of the process during the case (Linux only).
     pub peak_mib: Option<f64>,
@@ -198,6 +201,7 @@ pub fn run_case(gpu: &GpuRenderer, case: &Case, runs: usize) -> Result<Row, GpuE
     }
     let warm_ms = warm_frame_ms(gpu, &case.scene, &options, runs)?;
     let warm_rgb8_ms = warm_rgb8_frame_ms(gpu, &case.scene, &options, runs)?;
+    let moving_rgb8_ms = moving_rgb8_frame_ms(gpu, &case.scene, &options, runs)?;
     let peak_mib = memory::peak_mib();
     let positions: Vec<(u32, u32)> = gpu_samples.iter().map(|s: &Sample| s.position).collect();
     let reference_renderer = Reference::new(&case.scene, &reference_options);
@@ -221,6 +225,7 @@ pub fn run_case(gpu: &GpuRenderer, case: &Case, runs: usize) -> Result<Row, GpuE
         wall_ms: median(&mut wall),
         warm_ms,
         warm_rgb8_ms,
+        moving_rgb8_ms,
         runs: runs.max(1),
         peak_mib,
         samples: positions.len(),
@@ -255,14 +260,59 @@ pub fn warm_rgb8_frame_ms(
     options: &RenderOptions,
     runs: usize,
 ) -> Result<f64, GpuError> {
+    rgb8_frames_ms(gpu, scene, options, runs, |_| Ok(()))
+}
+
+/// Radians the camera of [`moving_rgb8_frame_ms`] turns each frame: four pixels of the live
+/// view's orbit (docs/SPEC.md §9).
+pub const MOVING_TURN: f64 = 0.02;
+
+/// [`warm_rgb8_frame_ms`] with the camera turned by [`MOVING_TURN`] each frame about its up
+/// vector through the middle of the scene's bounds, as the live view orbits: the scene
+/// prepared once, then aimed at each frame's camera ([`PreparedScene::aim`]).
+pub fn moving_rgb8_frame_ms(
+    gpu: &GpuRenderer,
+    scene: &Scene,
+    options: &RenderOptions,
+    runs: usize,
+) -> Result<f64, GpuError> {
+    let pivot = scene.bounds().bounds().filter(|b| !b.is_empty()).map_or(DVec3::ZERO, |b| (b.min + b.max) / 2.0);
+    let mut moved = scene.clone();
+    rgb8_frames_ms(gpu, scene, options, runs, |prepared| {
+        moved.camera = turned(&moved.camera, pivot, MOVING_TURN);
+        prepared.aim(&moved).map(drop)
+    })
+}
+
+/// The median of `runs` frames (after one thrown away) of `scene`'s colour alone, quantised
+/// by the kernel and read into one 8-bit RGB image the loop keeps, the scene prepared once
+/// and changed by `before_frame` before each frame.
+fn rgb8_frames_ms(
+    gpu: &GpuRenderer,
+    scene: &Scene,
+    options: &RenderOptions,
+    runs: usize,
+    mut before_frame: impl FnMut(&mut PreparedScene) -> Result<(), GpuError>,
+) -> Result<f64, GpuError> {
     let options = RenderOptions { outputs: Output::Color.into(), ..*options };
-    let prepared = gpu.prepare(scene, &options, true)?;
+    let mut prepared = gpu.prepare(scene, &options, true)?;
     let mut rgb = vec![0u8; options.width as usize * options.height as usize * 3];
-    let mut read = |tile: &ReadTile| {
-        tile.color_rgb_into(&mut rgb);
-        Ok::<(), GpuError>(())
-    };
-    median_frame_ms(runs, || prepared.render(&mut read).map(drop))
+    median_frame_ms(runs, || {
+        before_frame(&mut prepared)?;
+        let mut read = |tile: &ReadTile| {
+            tile.color_rgb_into(&mut rgb);
+            Ok::<(), GpuError>(())
+        };
+        prepared.render(&mut read).map(drop)
+    })
+}
+
+/// `camera` turned by `angle` radians about its up vector through `pivot`.
+fn turned(camera: &Camera, pivot: DVec3, angle: f64) -> Camera {
+    let turn = glam::DMat3::from_axis_angle(camera.up.normalize(), angle);
+    let center = pivot + turn * (camera.center - pivot);
+    // Turning about up keeps direction and up apart, so the frame exists.
+    Camera::new(camera.projection, center, turn * camera.direction, camera.up, camera.location).unwrap_or(*camera)
 }
 
 /// The median milliseconds of `runs` calls of `frame`, after one thrown away.
@@ -566,13 +616,13 @@ pub fn markdown(rows: &[Row], adapter: &str) -> String {
         rows.first().map_or(0, |r| r.runs)
     );
     out.push_str(
-        "| scene | triangle test | candidates from | primitives | pixels | build ms | kernel ms | wall ms | warm frame ms | warm 8-bit colour ms | rays/pixel | Mrays/s | reference Mrays/s | scene MiB | peak MiB | samples | >1 level | hit/miss | depth rel. max | normal max (rad) |\n\
-         | --- | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n",
+        "| scene | triangle test | candidates from | primitives | pixels | build ms | kernel ms | wall ms | warm frame ms | warm 8-bit colour ms | moving 8-bit colour ms | rays/pixel | Mrays/s | reference Mrays/s | scene MiB | peak MiB | samples | >1 level | hit/miss | depth rel. max | normal max (rad) |\n\
+         | --- | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n",
     );
     for r in rows {
         let _ = writeln!(
             out,
-            "| {} | {} | {} | {} | {}² | {} | {:.2} | {:.1} | {:.2} | {:.2} | {:.2} | {:.1} | {} | {:.2} | {} | {} | {:.3}% | {} | {:.1e} | {:.1e} |",
+            "| {} | {} | {} | {} | {}² | {} | {:.2} | {:.1} | {:.2} | {:.2} | {:.2} | {:.2} | {:.1} | {} | {:.2} | {} | {} | {:.3}% | {} | {:.1e} | {:.1e} |",
             r.name,
             r.triangle_test.name(),
             r.acceleration.name(),
@@ -583,6 +633,7 @@ pub fn markdown(rows: &[Row], adapter: &str) -> String {
             r.wall_ms,
             r.warm_ms,
             r.warm_rgb8_ms,
+            r.moving_rgb8_ms,
             r.rays as f64 / r.pixels() as f64,
             r.mrays_per_s(),
             r.reference_mrays_per_s().map_or("-".to_string(), |m| format!("{m:.2}")),
@@ -600,11 +651,11 @@ pub fn markdown(rows: &[Row], adapter: &str) -> String {
 
 /// The rows as CSV, one line each.
 pub fn csv(rows: &[Row]) -> String {
-    let mut out = String::from("scene,triangle_test,acceleration,primitives,triangles,width,height,acceleration_build_ms,scene_bytes,kernel_ms,kernel_from_timestamps,wall_ms,warm_frame_ms,warm_rgb8_frame_ms,rays,mrays_per_s,reference_ms,peak_mib,samples,off_by_more_than_one_fraction,hit_mismatches,depth_rel_max,normal_angle_max_rad,color_float_max\n");
+    let mut out = String::from("scene,triangle_test,acceleration,primitives,triangles,width,height,acceleration_build_ms,scene_bytes,kernel_ms,kernel_from_timestamps,wall_ms,warm_frame_ms,warm_rgb8_frame_ms,moving_rgb8_frame_ms,rays,mrays_per_s,reference_ms,peak_mib,samples,off_by_more_than_one_fraction,hit_mismatches,depth_rel_max,normal_angle_max_rad,color_float_max\n");
     for r in rows {
         let _ = writeln!(
             out,
-            "{},{},{},{},{},{},{},{},{},{:.4},{},{:.3},{:.3},{:.3},{},{:.3},{},{},{},{:.6},{},{:.3e},{:.3e},{:.3e}",
+            "{},{},{},{},{},{},{},{},{},{:.4},{},{:.3},{:.3},{:.3},{:.3},{},{:.3},{},{},{},{:.6},{},{:.3e},{:.3e},{:.3e}",
             r.name,
             r.triangle_test.name(),
             r.acceleration.name(),
@@ -619,6 +670,7 @@ pub fn csv(rows: &[Row]) -> String {
             r.wall_ms,
             r.warm_ms,
             r.warm_rgb8_ms,
+            r.moving_rgb8_ms,
             r.rays,
             r.mrays_per_s(),
             r.reference_ms.map_or(String::new(), |ms| format!("{ms:.3}")),
