@@ -15,8 +15,7 @@
 
 use super::dispatch::Dispatch;
 use super::error::GpuError;
-use super::prepared::{check_flat_loops, frame_params, kernel_config, ListsRoom, Planned, PreparedScene};
-use super::tiles::Tiling;
+use super::prepared::{built, frame_params, frame_stats, kernel_config, ListsRoom, Planned, PreparedScene};
 use super::upload::rewrite_inputs;
 use crate::render::RenderStats;
 use crate::scene::Scene;
@@ -41,13 +40,8 @@ impl<'a> PreparedScene<'a> {
         let gpu: &'a super::GpuRenderer = self.dispatch.gpu;
         let (options, layout) = (self.dispatch.options, self.dispatch.layout);
         let Planned { traced, mut plan, mut buffers, .. } = Planned::new(gpu, scene, &options, layout)?;
-        plan.build(&mut buffers, &gpu.options, self.kept.shape.as_ref());
-        check_flat_loops(&buffers)?;
+        let tiling = built(gpu, scene, &options, layout, &mut buffers, &mut plan, self.kept.shape.as_ref())?;
         let config = kernel_config(gpu, &buffers, buffers.acceleration(), layout, &options, &traced);
-        let tiling = Tiling::new(gpu, scene, &options, &layout, buffers.bins.as_ref())?;
-        if let Some(bins) = &mut buffers.bins {
-            bins.finish(&buffers.triangles);
-        }
         let same_kernel_and_slots = config == self.kept.config && tiling.fits(self.dispatch.tile_rows, self.kept.sizes);
         if !same_kernel_and_slots || !rewrite_inputs(gpu, &self.kept.inputs, &buffers)? {
             // A camera that moves on is likely to outgrow lists again: where the scene has
@@ -55,15 +49,10 @@ impl<'a> PreparedScene<'a> {
             *self = PreparedScene::new(gpu, scene, &options, layout, ListsRoom::Doubled)?;
             return Ok(Aimed::Prepared);
         }
-        let built_ms = [buffers.bvh.as_ref().map(|b| b.build_ms), buffers.bins.as_ref().map(|b| b.build_ms)];
         self.stats = RenderStats {
-            kernel_ns: gpu.timestamps.then_some(0),
-            grid_bounds: options.stats.then(|| buffers.grid_world_bounds(plan.rays.center)).flatten(),
-            acceleration_build_ms: built_ms.into_iter().flatten().next().or(buffers.grid.as_ref().map(|g| g.build_ms)),
             scene_bytes: self.stats.scene_bytes,
-            acceleration: buffers.acceleration(),
             prepare_ms: start.elapsed().as_secs_f64() * 1e3,
-            ..RenderStats::default()
+            ..frame_stats(gpu, &buffers, &plan, &options)
         };
         self.dispatch.params = frame_params(&buffers, &options, &traced);
         self.dispatch.bins = buffers.bins.take();

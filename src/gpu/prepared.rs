@@ -134,11 +134,10 @@ impl<'a> PreparedScene<'a> {
         }
         let counters = Counters::new(gpu, options.stats);
         let stats = RenderStats {
-            kernel_ns: gpu.timestamps.then_some(0),
             compile_ms,
             specialise_ms,
-            grid_bounds: options.stats.then(|| buffers.grid_world_bounds(plan.rays.center)).flatten(),
-            ..uploaded.stats(&buffers)
+            scene_bytes: uploaded.scene_bytes(),
+            ..frame_stats(gpu, &buffers, &plan, options)
         };
         let params = frame_params(&buffers, options, &traced);
         let (dispatch, inputs, sizes) =
@@ -223,7 +222,7 @@ pub(super) fn kernel_config(
 
 /// What a scene's render casts, and where it finds its candidates.
 pub(super) struct Plan {
-    pub rays: crate::camera::PrimaryRays,
+    rays: crate::camera::PrimaryRays,
     secondary_rays: bool,
     sampled_rays: bool,
     grid: Option<GridChoice>,
@@ -247,7 +246,7 @@ impl Plan {
 
     /// Builds the grid (handed over: built once), the bins or the hierarchy into `buffers`;
     /// a hierarchy in the shape of `shape` where given ([`SceneBuffers::build_acceleration`]).
-    pub fn build(&mut self, buffers: &mut SceneBuffers, options: &super::GpuOptions, shape: Option<&GpuBvh>) {
+    fn build(&mut self, buffers: &mut SceneBuffers, options: &super::GpuOptions, shape: Option<&GpuBvh>) {
         let grid = self.grid.take();
         buffers.build_acceleration(&self.rays, options, self.secondary_rays, self.sampled_rays, grid, shape);
     }
@@ -268,7 +267,7 @@ fn flattened(scene: &Scene, options: &RenderOptions, rays: &crate::camera::Prima
 
 /// Refuses flat loops (no bins, hierarchy or grid) over more primitives than a loop may
 /// run on a driver that ends long loops.
-pub(super) fn check_flat_loops(buffers: &SceneBuffers) -> Result<(), GpuError> {
+fn check_flat_loops(buffers: &SceneBuffers) -> Result<(), GpuError> {
     let flat = buffers.bins.is_none() && buffers.bvh.is_none() && buffers.grid.is_none();
     let primitives = buffers.spheres.len() + buffers.ellipsoids.len() + buffers.planes.len() + buffers.triangles.len();
     if flat && primitives > flatten::LOOP_LIMIT as usize / 2 {
@@ -278,6 +277,51 @@ pub(super) fn check_flat_loops(buffers: &SceneBuffers) -> Result<(), GpuError> {
         )));
     }
     Ok(())
+}
+
+/// Builds `plan`'s way of finding candidates into `buffers` (a hierarchy in the shape of
+/// `shape` where given), checks its flat loops, cuts the render into tiles and finishes the
+/// bins: what a render needs before its buffers are written, whether the scene is prepared
+/// or aimed at a moved camera ([`PreparedScene::aim`]).
+pub(super) fn built(
+    gpu: &GpuRenderer,
+    scene: &Scene,
+    options: &RenderOptions,
+    layout: PixelLayout,
+    buffers: &mut SceneBuffers,
+    plan: &mut Plan,
+    shape: Option<&GpuBvh>,
+) -> Result<Tiling, GpuError> {
+    plan.build(buffers, &gpu.options, shape);
+    check_flat_loops(buffers)?;
+    let tiling = Tiling::new(gpu, scene, options, &layout, buffers.bins.as_ref())?;
+    if let Some(bins) = &mut buffers.bins {
+        bins.finish(&buffers.triangles);
+    }
+    Ok(tiling)
+}
+
+/// What a frame of `buffers` reports of its preparation: how candidates are found and what
+/// building them cost, the grid's box for `-stats`, and room for the kernel's time.
+pub(super) fn frame_stats(
+    gpu: &GpuRenderer,
+    buffers: &SceneBuffers,
+    plan: &Plan,
+    options: &RenderOptions,
+) -> RenderStats {
+    let acceleration_build_ms = buffers
+        .bvh
+        .as_ref()
+        .map(|b| b.build_ms)
+        .or(buffers.bins.as_ref().map(|b| b.build_ms))
+        .or(buffers.grid.as_ref().map(|g| g.build_ms));
+    RenderStats {
+        kernel_ns: gpu.timestamps.then_some(0),
+        grid_bounds: options.stats.then(|| buffers.grid_world_bounds(plan.rays.center)).flatten(),
+        acceleration_build_ms,
+        acceleration: buffers.acceleration(),
+        ..RenderStats::default()
+    }
 }
 
 /// A scene's buffers on the device: the inputs, and the buffers of each tile slot.
@@ -298,12 +342,7 @@ impl Uploaded {
         buffers: &mut SceneBuffers,
         plan: &mut Plan,
     ) -> Result<Uploaded, GpuError> {
-        plan.build(buffers, &gpu.options, None);
-        check_flat_loops(buffers)?;
-        let tiling = Tiling::new(gpu, scene, options, &layout, buffers.bins.as_ref())?;
-        if let Some(bins) = &mut buffers.bins {
-            bins.finish(&buffers.triangles);
-        }
+        let tiling = built(gpu, scene, options, layout, buffers, plan, None)?;
         let inputs = upload_inputs(gpu, buffers)?;
         // The first tile's lists go straight into slot 0's buffers, and every slot's buffers
         // are made (and where the host maps them, their pages touched) here rather than on
@@ -316,7 +355,7 @@ impl Uploaded {
         let limit = gpu.limits.max_storage_buffer_binding_size;
         let band_bytes = tiling.band_bytes.map(|(ranges, items)| match room {
             ListsRoom::Exact => (ranges, items),
-            ListsRoom::Doubled => (ranges, (2 * items).min(limit.max(items))),
+            ListsRoom::Doubled => (ranges, (2 * items).min(limit)),
         });
         let sizes = SlotSizes { tile_bytes, sample_bytes: tiling.sample_bytes, band_bytes };
         let slots = options.height.div_ceil(tiling.tile_rows).min(gpu.options.tile_slots.max(1) as u32);
@@ -326,22 +365,10 @@ impl Uploaded {
         Ok(Uploaded { tiling, inputs, sizes, slot_buffers })
     }
 
-    /// What the preparation cost in memory and in building the acceleration.
-    fn stats(&self, buffers: &SceneBuffers) -> RenderStats {
+    /// The bytes of the scene's buffers and of every slot's lists on the device.
+    fn scene_bytes(&self) -> u64 {
         let band_buffer_bytes = self.sizes.band_bytes.map_or(0, |(r, i)| r + i) * self.slot_buffers.len() as u64;
-        let scene_bytes = self.inputs.0.iter().flatten().map(|b| b.size()).sum::<u64>() + band_buffer_bytes;
-        let acceleration_build_ms = buffers
-            .bvh
-            .as_ref()
-            .map(|b| b.build_ms)
-            .or(buffers.bins.as_ref().map(|b| b.build_ms))
-            .or(buffers.grid.as_ref().map(|g| g.build_ms));
-        RenderStats {
-            acceleration_build_ms,
-            scene_bytes,
-            acceleration: buffers.acceleration(),
-            ..RenderStats::default()
-        }
+        self.inputs.0.iter().flatten().map(|b| b.size()).sum::<u64>() + band_buffer_bytes
     }
 
     /// The tiles' dispatch: each slot bound to the kernel `compiled` (of `config`, with
