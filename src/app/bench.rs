@@ -8,6 +8,7 @@
 //! plot.
 
 use crate::app::memory;
+use crate::app::orbit::Orbit;
 use glam::DVec3;
 use raycaster::cpu::Reference;
 use raycaster::gpu::ray_tree::RenderRays;
@@ -263,23 +264,24 @@ pub fn warm_rgb8_frame_ms(
     rgb8_frames_ms(gpu, scene, options, runs, |_| Ok(()))
 }
 
-/// Radians the camera of [`moving_rgb8_frame_ms`] turns each frame: four pixels of the live
-/// view's orbit (docs/SPEC.md §9).
-pub const MOVING_TURN: f64 = 0.02;
+/// Pixels of the live view's orbit ([`Orbit::orbit`], 0.005 rad a pixel) the camera of
+/// [`moving_rgb8_frame_ms`] turns each frame: 0.02 rad.
+pub const MOVING_PIXELS: f64 = 4.0;
 
-/// [`warm_rgb8_frame_ms`] with the camera turned by [`MOVING_TURN`] each frame about its up
-/// vector through the middle of the scene's bounds, as the live view orbits: the scene
-/// prepared once, then aimed at each frame's camera ([`PreparedScene::aim`]).
+/// [`warm_rgb8_frame_ms`] with the camera orbited by [`MOVING_PIXELS`] each frame, as a
+/// drag turns the live view's (docs/SPEC.md §9): the scene prepared once, then aimed at
+/// each frame's camera ([`PreparedScene::aim`]).
 pub fn moving_rgb8_frame_ms(
     gpu: &GpuRenderer,
     scene: &Scene,
     options: &RenderOptions,
     runs: usize,
 ) -> Result<f64, GpuError> {
-    let pivot = scene.bounds().bounds().filter(|b| !b.is_empty()).map_or(DVec3::ZERO, |b| (b.min + b.max) / 2.0);
+    let mut orbit = Orbit::of_scene(scene);
     let mut moved = scene.clone();
     rgb8_frames_ms(gpu, scene, options, runs, |prepared| {
-        moved.camera = turned(&moved.camera, pivot, MOVING_TURN);
+        orbit.orbit(MOVING_PIXELS, 0.0);
+        moved.camera = orbit.camera();
         prepared.aim(&moved).map(drop)
     })
 }
@@ -305,14 +307,6 @@ fn rgb8_frames_ms(
         };
         prepared.render(&mut read).map(drop)
     })
-}
-
-/// `camera` turned by `angle` radians about its up vector through `pivot`.
-fn turned(camera: &Camera, pivot: DVec3, angle: f64) -> Camera {
-    let turn = glam::DMat3::from_axis_angle(camera.up.normalize(), angle);
-    let center = pivot + turn * (camera.center - pivot);
-    // Turning about up keeps direction and up apart, so the frame exists.
-    Camera::new(camera.projection, center, turn * camera.direction, camera.up, camera.location).unwrap_or(*camera)
 }
 
 /// The median milliseconds of `runs` calls of `frame`, after one thrown away.

@@ -5,7 +5,8 @@
 //! `truckCamera`, `dollyCamera`): the camera turns about its own `up` vector as the scene
 //! file gives it and about its horizontal axis, never flipping over the pole. Where the
 //! course turns about the world's origin, we turn about a pivot on the line of sight, so
-//! that what the camera looks at stays at the centre of the image.
+//! that what the camera looks at stays at the centre of the image. Panning and zooming are
+//! the window's alone (feature `gui`).
 
 use glam::{DMat3, DVec3};
 use raycaster::scene::{Camera, Projection, Scene};
@@ -15,6 +16,7 @@ pub const RADIANS_PER_PIXEL: f64 = 0.005;
 
 /// How much one notch of the wheel (or 100 pixels of a right-button drag) brings the camera
 /// closer: the distance to the pivot, or an orthographic camera's `size`, times this.
+#[cfg(feature = "gui")]
 pub const ZOOM_PER_NOTCH: f64 = 0.8;
 
 /// The closest the direction comes to the up vector, in radians: the course's 0.01, which
@@ -73,6 +75,7 @@ impl Orbit {
     /// The mouse moved `(dx, dy)` pixels with the pan button held, in an image `side` pixels
     /// across its longer side: camera and pivot slide along the image plane so that a point
     /// at the pivot's depth stays under the mouse.
+    #[cfg(feature = "gui")]
     pub fn pan(&mut self, dx: f64, dy: f64, side: u32) {
         let frame = *self.camera.frame();
         let per_pixel = self.extent_at_pivot() / f64::from(side.max(1));
@@ -84,6 +87,7 @@ impl Orbit {
     /// Zooms by `notches` of the wheel (positive: closer): a perspective camera moves along
     /// its line of sight towards the pivot, never reaching it; an orthographic one narrows
     /// its view.
+    #[cfg(feature = "gui")]
     pub fn zoom(&mut self, notches: f64) {
         let factor = ZOOM_PER_NOTCH.powf(notches);
         match self.camera.projection {
@@ -99,6 +103,7 @@ impl Orbit {
     }
 
     /// The width of the view at the pivot's depth, in world units.
+    #[cfg(feature = "gui")]
     fn extent_at_pivot(&self) -> f64 {
         match self.camera.projection {
             Projection::Orthographic { size } => size,
@@ -171,6 +176,7 @@ mod tests {
         }
     }
 
+    #[cfg(feature = "gui")]
     #[test]
     fn panning_keeps_the_point_at_the_pivots_depth_under_the_mouse() {
         let mut orbit = Orbit::around(perspective(), DVec3::ZERO);
@@ -182,6 +188,7 @@ mod tests {
         assert!(close(orbit.pivot(), shift));
     }
 
+    #[cfg(feature = "gui")]
     #[test]
     fn zooming_moves_a_perspective_camera_and_narrows_an_orthographic_one() {
         let mut orbit = Orbit::around(perspective(), DVec3::ZERO);

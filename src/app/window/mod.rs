@@ -2,7 +2,7 @@
 //!
 //! The course's `-gui` opens an OpenGL preview and ray traces when `r` is pressed. Ours
 //! shows the ray-traced image itself, re-rendered as the mouse moves the camera
-//! ([`orbit`]): at a fraction of the size while it moves, at full size once it stops. `c`,
+//! ([`crate::app::orbit`]): at a fraction of the size while it moves, at full size once it stops. `c`,
 //! `n` and `d` show colour, normals and depth; `r` writes the files the command line names,
 //! as seen from the current camera; `q` or Esc closes the window.
 //!
@@ -10,13 +10,12 @@
 //! same kernel, the same fallbacks to the reference, so the window never shows what a file
 //! would not hold.
 
-pub mod orbit;
 mod present;
 
 use crate::app::args::RenderArgs;
 use crate::app::exit::{say, Failure};
 use crate::app::job;
-use orbit::Orbit;
+use crate::app::orbit::Orbit;
 use present::Screen;
 use raycaster::gpu::{DetachedScene, GpuRenderer, PreparedScene, Presented};
 use raycaster::image_io;
@@ -127,13 +126,10 @@ struct LiveView<'a> {
 
 impl<'a> LiveView<'a> {
     fn new(args: &'a RenderArgs, scene: Scene, verbose: bool) -> LiveView<'a> {
-        // The middle of the scene's bounds; with a plane, the course's centre of rotation.
-        let target =
-            scene.bounds().bounds().filter(|b| !b.is_empty()).map_or(glam::DVec3::ZERO, |b| (b.min + b.max) / 2.0);
         let output = args.files.outputs().iter().next().unwrap_or(Output::Color);
         LiveView {
             args,
-            orbit: Orbit::around(scene.camera, target),
+            orbit: Orbit::of_scene(&scene),
             scene,
             verbose,
             output,
