@@ -80,43 +80,64 @@ fn turned(scene: &Scene, angle: f64, zoom: f64) -> Scene {
     Scene { camera, ..scene.clone() }
 }
 
-/// Every output of a prepared scene's frame, as floats.
-fn frame_of(prepared: &PreparedScene, options: &RenderOptions) -> (Frame, RenderStats) {
+/// A frame's outputs as the tiles hold them: floats, or for a scene prepared `packed` (the
+/// live view's and `bench`'s moving frames) the 8-bit colour and normals and the depth's
+/// bits as the kernel packed them.
+#[derive(PartialEq)]
+enum Shown {
+    Floats(Frame),
+    Packed(Vec<u8>),
+}
+
+/// Every output of a prepared scene's frame.
+fn frame_of(prepared: &PreparedScene, options: &RenderOptions, packed: bool) -> (Shown, RenderStats) {
     let mut frame = Frame::new(options);
+    let mut bytes = Vec::new();
     let stats = prepared
         .render(|tile| {
-            frame.paste(tile.first_row, &tile.to_frame());
+            match packed {
+                false => frame.paste(tile.first_row, &tile.to_frame()),
+                true => {
+                    bytes.extend(tile.color_rgb());
+                    bytes.extend(tile.normals_rgb());
+                    bytes.extend(tile.depth_values().iter().flat_map(|t| t.to_le_bytes()));
+                }
+            }
             Ok::<(), GpuError>(())
         })
         .unwrap();
-    (frame, stats)
+    (if packed { Shown::Packed(bytes) } else { Shown::Floats(frame) }, stats)
 }
 
-/// The frame of `scene` prepared afresh.
-fn fresh(gpu: &GpuRenderer, scene: &Scene, options: &RenderOptions) -> (Frame, RenderStats) {
-    frame_of(&gpu.prepare(scene, options, false).unwrap(), options)
+/// The frame of `scene` prepared afresh, `packed` or as floats.
+fn fresh(gpu: &GpuRenderer, scene: &Scene, options: &RenderOptions, packed: bool) -> (Shown, RenderStats) {
+    frame_of(&gpu.prepare(scene, options, packed).unwrap(), options, packed)
 }
 
-/// Turns the camera of `scene` step by step, aiming one prepared scene at each camera: each
-/// frame is the fresh one, and differs from the frame before (the camera did move). Returns
-/// how many aims were in place.
-fn orbit(gpu: &GpuRenderer, scene: &Scene, options: &RenderOptions, steps: &[f64]) -> usize {
-    let mut prepared = gpu.prepare(scene, options, false).unwrap();
-    let (mut before, _) = frame_of(&prepared, options);
+/// Turns the camera of `scene` step by step, aiming one prepared scene (`packed` or not) at
+/// each camera: each frame is the fresh one, and differs from the frame before (the camera
+/// did move). Returns how many aims were in place.
+fn orbit(gpu: &GpuRenderer, scene: &Scene, options: &RenderOptions, steps: &[f64], packed: bool) -> usize {
+    let mut prepared = gpu.prepare(scene, options, packed).unwrap();
+    let (mut before, _) = frame_of(&prepared, options, packed);
     let mut in_place = 0;
     for (k, &angle) in steps.iter().enumerate() {
         let moved = turned(scene, angle, 1.0);
         in_place += (prepared.aim(&moved).unwrap() == Aimed::InPlace) as usize;
-        let (aimed, stats) = frame_of(&prepared, options);
-        let (expected, fresh_stats) = fresh(gpu, &moved, options);
+        let (aimed, stats) = frame_of(&prepared, options, packed);
+        let (expected, fresh_stats) = fresh(gpu, &moved, options, packed);
         assert!(aimed == expected, "step {k} ({angle} rad) differs from a scene prepared for its camera");
         assert_eq!(stats.acceleration, fresh_stats.acceleration, "step {k}");
         assert_eq!(stats.pixels_beyond_reach, fresh_stats.pixels_beyond_reach, "step {k}");
-        assert!(aimed.color != before.color, "step {k}: the camera moved, so the image does");
+        assert!(aimed != before, "step {k}: the camera moved, so the image does");
         before = aimed;
     }
     in_place
 }
+
+/// The ways a scene's buffers travel: mapped by the host where the adapter allows it (a CPU
+/// adapter, as here), and copied through staging and readback buffers, as on a discrete GPU.
+const MAPPED_AND_COPIED: [bool; 2] = [true, false];
 
 #[test]
 fn an_aimed_scene_renders_what_a_scene_prepared_for_its_camera_renders() {
@@ -124,17 +145,29 @@ fn an_aimed_scene_renders_what_a_scene_prepared_for_its_camera_renders() {
     let options = RenderOptions::all(61, 53);
     let steps = [0.04, 0.1, 0.25, -0.2, 0.0];
     for acceleration in [Acceleration::Bins, Acceleration::Hierarchy] {
-        let gpu = gpu.on_same_device(GpuOptions { acceleration, max_tile_bytes: 61 * 8 * 32, ..GpuOptions::default() });
-        for triangles in [false, true] {
-            for camera in [PERSPECTIVE, ORTHOGRAPHIC] {
+        for mapped_buffers in MAPPED_AND_COPIED {
+            let gpu = gpu.on_same_device(GpuOptions {
+                acceleration,
+                mapped_buffers,
+                max_tile_bytes: 61 * 8 * 32,
+                ..GpuOptions::default()
+            });
+            for (triangles, camera, packed) in ways() {
                 let scene = lattice(triangles, camera);
-                let in_place = orbit(&gpu, &scene, &options, &steps);
+                let in_place = orbit(&gpu, &scene, &options, &steps, packed);
                 // Small turns keep the bins' lists within the slots; the hierarchy always fits.
                 let least = if acceleration == Acceleration::Hierarchy { steps.len() } else { 1 };
-                assert!(in_place >= least, "{acceleration:?}, triangles {triangles}: {in_place} aims in place");
+                let case = format!("{acceleration:?}, mapped {mapped_buffers}, triangles {triangles}, packed {packed}");
+                assert!(in_place >= least, "{case}: {in_place} aims in place");
             }
         }
     }
+}
+
+/// Spheres or triangles, seen in perspective or orthographically, as floats or packed.
+fn ways() -> impl Iterator<Item = (bool, &'static str, bool)> {
+    let scenes = [false, true].into_iter().flat_map(|t| [PERSPECTIVE, ORTHOGRAPHIC].map(|c| (t, c)));
+    scenes.flat_map(|(triangles, camera)| [false, true].map(|packed| (triangles, camera, packed)))
 }
 
 /// Under sampling (docs/SPEC.md §8: jittered samples and a tent filter reaching into the
@@ -148,8 +181,10 @@ fn an_aimed_sampled_scene_renders_what_a_scene_prepared_for_its_camera_renders()
     let options = RenderOptions { sampling: Some(sampling), ..RenderOptions::all(45, 37) };
     for acceleration in [Acceleration::Bins, Acceleration::Hierarchy] {
         let gpu = gpu.on_same_device(GpuOptions { acceleration, max_tile_bytes: 45 * 6 * 32, ..GpuOptions::default() });
-        let in_place = orbit(&gpu, &lattice(true, PERSPECTIVE), &options, &[0.05, -0.1, 0.2]);
-        assert!(in_place >= 1, "{acceleration:?}: {in_place} aims in place");
+        for packed in [false, true] {
+            let in_place = orbit(&gpu, &lattice(true, PERSPECTIVE), &options, &[0.05, -0.1, 0.2], packed);
+            assert!(in_place >= 1, "{acceleration:?}, packed {packed}: {in_place} aims in place");
+        }
     }
 }
 
@@ -163,7 +198,7 @@ fn an_aimed_scene_with_a_grid_renders_what_a_scene_prepared_for_its_camera_rende
     let grid = Some(GridSize { nx: 7, ny: 6, nz: 3 });
     for visualize_grid in [false, true] {
         let options = RenderOptions { grid, visualize_grid, ..RenderOptions::all(40, 36) };
-        let in_place = orbit(gpu, &lattice(false, PERSPECTIVE), &options, &[0.05, -0.1, 0.2]);
+        let in_place = orbit(gpu, &lattice(false, PERSPECTIVE), &options, &[0.05, -0.1, 0.2], false);
         assert_eq!(in_place, 3, "visualize_grid {visualize_grid}");
     }
 }
@@ -177,10 +212,15 @@ fn an_aimed_scene_hands_over_what_the_moved_camera_sees() {
     let mut options = RenderOptions::all(48, 40);
     options.shading.bounces = 3;
     options.shading.shadows = true;
-    let (_, stats) = fresh(gpu, &scene, &options);
+    let (_, stats) = fresh(gpu, &scene, &options, false);
     assert!(stats.pixels_beyond_reach > 0, "the test means something: {stats:?}");
-    let in_place = orbit(gpu, &scene, &options, &[0.05, 0.12, -0.08]);
-    assert_eq!(in_place, 3);
+    for mapped_buffers in MAPPED_AND_COPIED {
+        let gpu = gpu.on_same_device(GpuOptions { mapped_buffers, ..GpuOptions::default() });
+        for packed in [false, true] {
+            let in_place = orbit(&gpu, &scene, &options, &[0.05, 0.12, -0.08], packed);
+            assert_eq!(in_place, 3, "mapped {mapped_buffers}, packed {packed}");
+        }
+    }
 }
 
 /// Lists that outgrow the slots' buffers (the lattice seen from the side, with bins: its
@@ -189,16 +229,22 @@ fn an_aimed_scene_hands_over_what_the_moved_camera_sees() {
 #[test]
 fn a_camera_that_outgrows_the_slots_prepares_again() {
     let Some(gpu) = common::gpu() else { return };
-    let gpu = gpu.on_same_device(GpuOptions { acceleration: Acceleration::Bins, ..GpuOptions::default() });
     let options = RenderOptions::all(64, 64);
     let scene = lattice(false, PERSPECTIVE);
-    let mut prepared = gpu.prepare(&scene, &options, false).unwrap();
     let side = turned(&scene, 1.3, 1.0);
-    assert_eq!(prepared.aim(&side).unwrap(), Aimed::Prepared);
-    assert!(frame_of(&prepared, &options).0 == fresh(&gpu, &side, &options).0);
-    // And back: the larger slots hold the first camera's lists.
-    assert_eq!(prepared.aim(&scene).unwrap(), Aimed::InPlace);
-    assert!(frame_of(&prepared, &options).0 == fresh(&gpu, &scene, &options).0);
+    for mapped_buffers in MAPPED_AND_COPIED {
+        let gpu = gpu.on_same_device(GpuOptions {
+            acceleration: Acceleration::Bins,
+            mapped_buffers,
+            ..GpuOptions::default()
+        });
+        let mut prepared = gpu.prepare(&scene, &options, false).unwrap();
+        assert_eq!(prepared.aim(&side).unwrap(), Aimed::Prepared, "mapped {mapped_buffers}");
+        assert!(frame_of(&prepared, &options, false).0 == fresh(&gpu, &side, &options, false).0);
+        // And back: the larger slots hold the first camera's lists.
+        assert_eq!(prepared.aim(&scene).unwrap(), Aimed::InPlace, "mapped {mapped_buffers}");
+        assert!(frame_of(&prepared, &options, false).0 == fresh(&gpu, &scene, &options, false).0);
+    }
 }
 
 /// A camera the f32 kernel cannot serve (docs/SPEC.md §6: a sphere more than 2¹³ of its
@@ -214,5 +260,5 @@ fn a_camera_too_far_for_the_precision_contract_is_refused_and_the_scene_kept() {
     let far = Scene { camera: far.unwrap(), ..scene.clone() };
     assert!(matches!(gpu.prepare(&far, &options, false), Err(GpuError::Precision(_))));
     assert!(matches!(prepared.aim(&far), Err(GpuError::Precision(_))));
-    assert!(frame_of(&prepared, &options).0 == fresh(gpu, &scene, &options).0);
+    assert!(frame_of(&prepared, &options, false).0 == fresh(gpu, &scene, &options, false).0);
 }
