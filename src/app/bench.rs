@@ -12,7 +12,7 @@ use crate::app::orbit::Orbit;
 use glam::DVec3;
 use raycaster::cpu::Reference;
 use raycaster::gpu::ray_tree::RenderRays;
-use raycaster::gpu::{Acceleration, GpuError, GpuOptions, GpuRenderer, PreparedScene, ReadTile};
+use raycaster::gpu::{Acceleration, GpuError, GpuOptions, GpuRenderer, PreparedScene, Presented, Presenter, ReadTile};
 use raycaster::grid::GridSize;
 use raycaster::metrics::{compare_frames, depth_range_of, OutputErrors};
 use raycaster::render::{Frame, Output, Pixel, RenderOptions, Shading, TriangleTest};
@@ -92,6 +92,10 @@ pub struct Row {
     /// [`Row::warm_rgb8_ms`] with the camera turned a little each frame, the scene aimed at
     /// it rather than prepared again ([`moving_rgb8_frame_ms`]): the live view's orbit.
     pub moving_rgb8_ms: f64,
+    /// [`Row::moving_rgb8_ms`] drawn onto a texture on the device instead of read back, as
+    /// the live view draws a moving frame ([`moving_presented_frame_ms`]); `None` where the
+    /// live view would draw it from the host (a pixel handed over to the reference).
+    pub moving_presented_ms: Option<f64>,
     pub runs: usize,
     /// Peak resident memory of the process during the case (Linux only).
     pub peak_mib: Option<f64>,
@@ -203,6 +207,7 @@ pub fn run_case(gpu: &GpuRenderer, case: &Case, runs: usize) -> Result<Row, GpuE
     let warm_ms = warm_frame_ms(gpu, &case.scene, &options, runs)?;
     let warm_rgb8_ms = warm_rgb8_frame_ms(gpu, &case.scene, &options, runs)?;
     let moving_rgb8_ms = moving_rgb8_frame_ms(gpu, &case.scene, &options, runs)?;
+    let moving_presented_ms = moving_presented_frame_ms(gpu, &case.scene, &options, runs)?;
     let peak_mib = memory::peak_mib();
     let positions: Vec<(u32, u32)> = gpu_samples.iter().map(|s: &Sample| s.position).collect();
     let reference_renderer = Reference::new(&case.scene, &reference_options);
@@ -227,6 +232,7 @@ pub fn run_case(gpu: &GpuRenderer, case: &Case, runs: usize) -> Result<Row, GpuE
         warm_ms,
         warm_rgb8_ms,
         moving_rgb8_ms,
+        moving_presented_ms,
         runs: runs.max(1),
         peak_mib,
         samples: positions.len(),
@@ -284,6 +290,36 @@ pub fn moving_rgb8_frame_ms(
         moved.camera = orbit.camera();
         prepared.aim(&moved).map(drop)
     })
+}
+
+/// [`moving_rgb8_frame_ms`] as the live view shows a moving frame (docs/SPEC.md §9): the
+/// scene aimed at each frame's camera, its tiles drawn onto an 8-bit texture of the frame's
+/// size on the device (`PreparedScene::present`), the frame done when the one word saying
+/// whether a pixel was handed over is read back. The window's frame but the display's own
+/// work (its surface and compositor), so measurable where there is no display. `None` where
+/// a frame was not drawn on the device: a pixel handed over to the reference, or texels
+/// beyond one binding, which the live view draws from the host.
+pub fn moving_presented_frame_ms(
+    gpu: &GpuRenderer,
+    scene: &Scene,
+    options: &RenderOptions,
+    runs: usize,
+) -> Result<Option<f64>, GpuError> {
+    let options = RenderOptions { outputs: Output::Color.into(), ..*options };
+    let mut prepared = gpu.prepare(scene, &options, true)?;
+    let presenter = Presenter::new(gpu);
+    let surface = Presenter::offscreen_target(gpu, options.width, options.height);
+    let mut orbit = Orbit::of_scene(scene);
+    let mut moved = scene.clone();
+    let mut drawn = true;
+    let ms = median_frame_ms(runs, || {
+        orbit.orbit(MOVING_PIXELS, 0.0);
+        moved.camera = orbit.camera();
+        prepared.aim(&moved)?;
+        drawn &= prepared.present(&presenter, &surface, 1)? == Presented::Drawn;
+        Ok(())
+    })?;
+    Ok(drawn.then_some(ms))
 }
 
 /// The median of `runs` frames (after one thrown away) of `scene`'s colour alone, quantised
@@ -461,6 +497,11 @@ pub fn standard_cases(corpus: &Path, quick: bool) -> Result<Vec<Case>, scene::Sc
         let name = path.file_stem().unwrap_or_default().to_string_lossy().into_owned();
         cases.push(case(&name, scene::load_scene(&path)?, 200));
     }
+    // A course scene at the live view's full size, whose moving frames should keep up with a
+    // display's refresh (`moving_presented_frame_ms`).
+    let live = course.join("scene2_10_bunny_1k.txt");
+    let (width, height) = LIVE_VIEW_SIZE;
+    cases.push(Case { height, ..case("scene2_10_bunny_1k", scene::load_scene(&live)?, width) });
     let mesh = |name: &str, path: PathBuf| -> Result<Scene, scene::SceneError> {
         Ok(mesh_scene(name, scene::load_obj(&path)?))
     };
@@ -503,6 +544,9 @@ pub fn standard_cases(corpus: &Path, quick: bool) -> Result<Vec<Case>, scene::Sc
     }
     Ok(cases)
 }
+
+/// The live view's window size the bench measures a course scene at: 1920×1080.
+const LIVE_VIEW_SIZE: (u32, u32) = (1920, 1080);
 
 /// Samples per pixel of the bench's rows of assignment 7.
 const SAMPLES_PER_PIXEL: [u32; 4] = [1, 4, 16, 36];
@@ -610,24 +654,25 @@ pub fn markdown(rows: &[Row], adapter: &str) -> String {
         rows.first().map_or(0, |r| r.runs)
     );
     out.push_str(
-        "| scene | triangle test | candidates from | primitives | pixels | build ms | kernel ms | wall ms | warm frame ms | warm 8-bit colour ms | moving 8-bit colour ms | rays/pixel | Mrays/s | reference Mrays/s | scene MiB | peak MiB | samples | >1 level | hit/miss | depth rel. max | normal max (rad) |\n\
-         | --- | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n",
+        "| scene | triangle test | candidates from | primitives | pixels | build ms | kernel ms | wall ms | warm frame ms | warm 8-bit colour ms | moving 8-bit colour ms | moving, drawn on the device ms | rays/pixel | Mrays/s | reference Mrays/s | scene MiB | peak MiB | samples | >1 level | hit/miss | depth rel. max | normal max (rad) |\n\
+         | --- | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n",
     );
     for r in rows {
         let _ = writeln!(
             out,
-            "| {} | {} | {} | {} | {}² | {} | {:.2} | {:.1} | {:.2} | {:.2} | {:.2} | {:.2} | {:.1} | {} | {:.2} | {} | {} | {:.3}% | {} | {:.1e} | {:.1e} |",
+            "| {} | {} | {} | {} | {} | {} | {:.2} | {:.1} | {:.2} | {:.2} | {:.2} | {} | {:.2} | {:.1} | {} | {:.2} | {} | {} | {:.3}% | {} | {:.1e} | {:.1e} |",
             r.name,
             r.triangle_test.name(),
             r.acceleration.name(),
             r.primitives,
-            if r.width == r.height { r.width.to_string() } else { format!("{}×{}", r.width, r.height) },
+            if r.width == r.height { format!("{}²", r.width) } else { format!("{}×{}", r.width, r.height) },
             r.acceleration_build_ms.map_or("-".to_string(), |ms| format!("{ms:.1}")),
             r.kernel_ms,
             r.wall_ms,
             r.warm_ms,
             r.warm_rgb8_ms,
             r.moving_rgb8_ms,
+            r.moving_presented_ms.map_or("-".to_string(), |ms| format!("{ms:.2}")),
             r.rays as f64 / r.pixels() as f64,
             r.mrays_per_s(),
             r.reference_mrays_per_s().map_or("-".to_string(), |m| format!("{m:.2}")),
@@ -645,11 +690,11 @@ pub fn markdown(rows: &[Row], adapter: &str) -> String {
 
 /// The rows as CSV, one line each.
 pub fn csv(rows: &[Row]) -> String {
-    let mut out = String::from("scene,triangle_test,acceleration,primitives,triangles,width,height,acceleration_build_ms,scene_bytes,kernel_ms,kernel_from_timestamps,wall_ms,warm_frame_ms,warm_rgb8_frame_ms,moving_rgb8_frame_ms,rays,mrays_per_s,reference_ms,peak_mib,samples,off_by_more_than_one_fraction,hit_mismatches,depth_rel_max,normal_angle_max_rad,color_float_max\n");
+    let mut out = String::from("scene,triangle_test,acceleration,primitives,triangles,width,height,acceleration_build_ms,scene_bytes,kernel_ms,kernel_from_timestamps,wall_ms,warm_frame_ms,warm_rgb8_frame_ms,moving_rgb8_frame_ms,moving_presented_frame_ms,rays,mrays_per_s,reference_ms,peak_mib,samples,off_by_more_than_one_fraction,hit_mismatches,depth_rel_max,normal_angle_max_rad,color_float_max\n");
     for r in rows {
         let _ = writeln!(
             out,
-            "{},{},{},{},{},{},{},{},{},{:.4},{},{:.3},{:.3},{:.3},{:.3},{},{:.3},{},{},{},{:.6},{},{:.3e},{:.3e},{:.3e}",
+            "{},{},{},{},{},{},{},{},{},{:.4},{},{:.3},{:.3},{:.3},{:.3},{},{},{:.3},{},{},{},{:.6},{},{:.3e},{:.3e},{:.3e}",
             r.name,
             r.triangle_test.name(),
             r.acceleration.name(),
@@ -665,6 +710,7 @@ pub fn csv(rows: &[Row]) -> String {
             r.warm_ms,
             r.warm_rgb8_ms,
             r.moving_rgb8_ms,
+            r.moving_presented_ms.map_or(String::new(), |ms| format!("{ms:.3}")),
             r.rays,
             r.mrays_per_s(),
             r.reference_ms.map_or(String::new(), |ms| format!("{ms:.3}")),

@@ -124,6 +124,21 @@ impl Presenter {
         }
     }
 
+    /// A texture of `width × height` texels the pass draws on as on a window's surface
+    /// (`Bgra8Unorm`, `COPY_DST`), where there is no window: `bench`'s moving frames.
+    pub fn offscreen_target(gpu: &GpuRenderer, width: u32, height: u32) -> wgpu::Texture {
+        gpu.device().create_texture(&wgpu::TextureDescriptor {
+            label: Some("offscreen target"),
+            size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::Bgra8Unorm,
+            usage: wgpu::TextureUsages::COPY_DST,
+            view_formats: &[],
+        })
+    }
+
     /// The texel buffer for a target of `row_texels × height`, made once per size.
     fn texels(&self, device: &wgpu::Device, size: u64) -> wgpu::Buffer {
         let mut kept = self.texels.lock().unwrap_or_else(|e| e.into_inner());
