@@ -25,11 +25,6 @@ struct Enlarge {
     row_texels: u32,
     // 1 where the target's bytes are blue, green, red, alpha; 0 for red, green, blue, alpha.
     bgra: u32,
-    // What the first word is, and what the pass makes of it: SHOWN_RGB a packed colour or
-    // |N|; SHOWN_GREY a depth's t (its bits; all ones where nothing was hit), shown in grey;
-    // SHOWN_DEPTH_OF_HITS a depth kept as its bits while the frame's hits are gathered into
-    // `hit_range` (without a `-depth` range), for `grey` to show once the host has the range.
-    shown: u32,
 }
 
 @group(0) @binding(0) var<storage, read> pixels: array<u32>;
@@ -41,7 +36,7 @@ struct Enlarge {
 // For a depth: depth_bounds[k] is the largest ordered key (below) whose grey level is at
 // least k (gpu::present::depth_bounds); [0] holds every key.
 @group(0) @binding(4) var<storage, read> depth_bounds: array<u32, 256>;
-// The ordered keys of the frame's nearest and farthest hit (SHOWN_DEPTH_OF_HITS).
+// The ordered keys of the frame's nearest and farthest hit (`depth_bits`).
 @group(0) @binding(5) var<storage, read_write> hit_range: array<atomic<u32>, 2>;
 
 // A float's bits as a key that orders floats as unsigned integers: the sign bit flipped for
@@ -89,38 +84,64 @@ fn fill_block(x: u32, y: u32, texel: u32) {
     }
 }
 
-// One invocation per pixel of the tile, writing its block: no division, which a CPU
-// driver's vector units do lane by lane (a pass with an invocation per texel, dividing
-// its coordinates by the scale, took lavapipe twice as long at a scale of 3).
+// Each view has its own entry point, which binds only what it uses: a CPU driver (llvmpipe)
+// runs both sides of a branch under a mask, so a pass that chose the view by a branch paid
+// for the depth's search and atomics on every colour pixel (docs/performance.md, "Frames
+// drawn on the device"). One invocation per pixel of the tile, writing its block: no division,
+// which a CPU driver's vector units do lane by lane (a pass with an invocation per texel,
+// dividing its coordinates by the scale, took lavapipe twice as long at a scale of 3).
+
+// Colour or |N|: each pixel's packed bytes as its block's texels.
 @compute @workgroup_size(16, 16)
-fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+fn rgb(@builtin(global_invocation_id) id: vec3<u32>) {
     if (id.x >= E.width || id.y >= E.rows) {
         return;
     }
-    let pixel = (id.y * E.width + id.x) * E.stride;
-    let first = pixels[pixel];
+    let first = pixels[(id.y * E.width + id.x) * E.stride];
+    note_handed_over(first);
+    fill_block(id.x, E.first_row + id.y, texel_of(first));
+}
+
+// The depth over a `-depth` range: each hit's t (its bits; all ones where nothing was hit)
+// as its grey level, black where nothing was hit.
+@compute @workgroup_size(16, 16)
+fn depth_grey(@builtin(global_invocation_id) id: vec3<u32>) {
+    if (id.x >= E.width || id.y >= E.rows) {
+        return;
+    }
+    let first = pixels[(id.y * E.width + id.x) * E.stride];
+    note_handed_over(first);
+    fill_block(id.x, E.first_row + id.y, texel_of(depth_rgb(first)));
+}
+
+// The depth over the frame's own hits (no `-depth` range): each depth kept as its bits
+// while the nearest and farthest hit are gathered into `hit_range`, for `grey` to show
+// once the host has the range.
+@compute @workgroup_size(16, 16)
+fn depth_bits(@builtin(global_invocation_id) id: vec3<u32>) {
+    if (id.x >= E.width || id.y >= E.rows) {
+        return;
+    }
+    let first = pixels[(id.y * E.width + id.x) * E.stride];
+    if (!note_handed_over(first) && first != 0xffffffffu) {
+        let key = ordered_key(first);
+        atomicMin(&hit_range[0], key);
+        atomicMax(&hit_range[1], key);
+    }
+    fill_block(id.x, E.first_row + id.y, first);
+}
+
+// Whether the pixel whose first word is `first` was handed over to the reference, noted
+// for the whole frame in `handed_over`.
+fn note_handed_over(first: u32) -> bool {
     let handed = first == CUT_SHORT_WORD || first == BEYOND_REACH_WORD;
     if (handed) {
         atomicOr(&handed_over, 1u);
     }
-    // Conditions every invocation shares: a CPU driver's lanes take the branches together.
-    if (E.shown == SHOWN_DEPTH_OF_HITS) {
-        if (first != 0xffffffffu && !handed) {
-            let key = ordered_key(first);
-            atomicMin(&hit_range[0], key);
-            atomicMax(&hit_range[1], key);
-        }
-        fill_block(id.x, E.first_row + id.y, first);
-        return;
-    }
-    var rgb = first;
-    if (E.shown == SHOWN_GREY) {
-        rgb = depth_rgb(first);
-    }
-    fill_block(id.x, E.first_row + id.y, texel_of(rgb));
+    return handed;
 }
 
-// The depths kept by `main` (SHOWN_DEPTH_OF_HITS) turned grey once the host has written the bounds of
+// The depths kept by `depth_bits` turned grey once the host has written the bounds of
 // the frame's range: one invocation per rendered pixel (`width` × `rows` of them, from
 // the top), reading its block's first texel and writing the block.
 @compute @workgroup_size(16, 16)
