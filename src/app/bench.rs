@@ -283,13 +283,7 @@ pub fn moving_rgb8_frame_ms(
     options: &RenderOptions,
     runs: usize,
 ) -> Result<f64, GpuError> {
-    let mut orbit = Orbit::of_scene(scene);
-    let mut moved = scene.clone();
-    rgb8_frames_ms(gpu, scene, options, runs, |prepared| {
-        orbit.orbit(MOVING_PIXELS, 0.0);
-        moved.camera = orbit.camera();
-        prepared.aim(&moved).map(drop)
-    })
+    rgb8_frames_ms(gpu, scene, options, runs, turning(scene))
 }
 
 /// [`moving_rgb8_frame_ms`] as the live view shows a moving frame (docs/SPEC.md §9): the
@@ -305,21 +299,38 @@ pub fn moving_presented_frame_ms(
     options: &RenderOptions,
     runs: usize,
 ) -> Result<Option<f64>, GpuError> {
-    let options = RenderOptions { outputs: Output::Color.into(), ..*options };
-    let mut prepared = gpu.prepare(scene, &options, true)?;
+    let mut prepared = prepared_colour(gpu, scene, options)?;
     let presenter = Presenter::new(gpu);
     let surface = Presenter::offscreen_target(gpu, options.width, options.height);
-    let mut orbit = Orbit::of_scene(scene);
-    let mut moved = scene.clone();
+    let mut turn = turning(scene);
     let mut drawn = true;
     let ms = median_frame_ms(runs, || {
-        orbit.orbit(MOVING_PIXELS, 0.0);
-        moved.camera = orbit.camera();
-        prepared.aim(&moved)?;
+        turn(&mut prepared)?;
         drawn &= prepared.present(&presenter, &surface, 1)? == Presented::Drawn;
         Ok(())
     })?;
     Ok(drawn.then_some(ms))
+}
+
+/// What a moving frame does first: the camera of `scene` turned by [`MOVING_PIXELS`] of the
+/// live view's orbit, and the prepared scene aimed at it ([`PreparedScene::aim`]).
+fn turning(scene: &Scene) -> impl FnMut(&mut PreparedScene) -> Result<(), GpuError> {
+    let mut orbit = Orbit::of_scene(scene);
+    let mut moved = scene.clone();
+    move |prepared| {
+        orbit.orbit(MOVING_PIXELS, 0.0);
+        moved.camera = orbit.camera();
+        prepared.aim(&moved).map(drop)
+    }
+}
+
+/// `scene` prepared for its colour alone, quantised by the kernel: the image a user sees.
+fn prepared_colour<'g>(
+    gpu: &'g GpuRenderer,
+    scene: &Scene,
+    options: &RenderOptions,
+) -> Result<PreparedScene<'g>, GpuError> {
+    gpu.prepare(scene, &RenderOptions { outputs: Output::Color.into(), ..*options }, true)
 }
 
 /// The median of `runs` frames (after one thrown away) of `scene`'s colour alone, quantised
@@ -332,8 +343,7 @@ fn rgb8_frames_ms(
     runs: usize,
     mut before_frame: impl FnMut(&mut PreparedScene) -> Result<(), GpuError>,
 ) -> Result<f64, GpuError> {
-    let options = RenderOptions { outputs: Output::Color.into(), ..*options };
-    let mut prepared = gpu.prepare(scene, &options, true)?;
+    let mut prepared = prepared_colour(gpu, scene, options)?;
     let mut rgb = vec![0u8; options.width as usize * options.height as usize * 3];
     median_frame_ms(runs, || {
         before_frame(&mut prepared)?;
