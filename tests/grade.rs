@@ -1,12 +1,13 @@
 //! `raycaster grade` as a teacher runs it on the course's assignment 4: a student's images
 //! judged against our render, line by line; images changed as a student's mistakes change
 //! them caught, and those FLIP cannot tell apart passed; a student's program that crashes,
-//! hangs or writes nothing judged, never the grader's failure. `raycaster gallery` on a
+//! hangs or writes nothing judged, never the grader's failure (tests/grade_sandbox.rs holds
+//! the hostile ones). `raycaster gallery` on a
 //! course folder of our own scenes.
 
 mod common;
 
-use common::bin::{command, path_str, stderr};
+use common::bin::{command, path_str, report_line, stderr, stdout};
 use image::RgbImage;
 use std::path::{Path, PathBuf};
 use std::process::Output;
@@ -25,18 +26,6 @@ fn assignment_4_rendered() -> Option<(PathBuf, tempfile::TempDir)> {
 
 fn grade(args: &[&str]) -> Output {
     command().arg("grade").args(args).output().unwrap()
-}
-
-fn stdout(output: &Output) -> String {
-    String::from_utf8_lossy(&output.stdout).into_owned()
-}
-
-/// The report's line for `image`.
-fn line_of<'a>(report: &'a str, image: &str) -> &'a str {
-    report
-        .lines()
-        .find(|l| l.split_whitespace().nth(1) == Some(image))
-        .unwrap_or_else(|| panic!("no {image}:\n{report}"))
 }
 
 fn read(path: &Path) -> RgbImage {
@@ -101,10 +90,10 @@ fn mutated_images_are_caught_and_a_dither_passes() {
     let report = stdout(&result);
     assert_eq!(result.status.code(), Some(1), "{report}{}", stderr(&result));
     for failing in ["output4_01.tga", "output4_02.tga", "output4_10.tga"] {
-        let line = line_of(&report, failing);
+        let line = report_line(&report, failing);
         assert!(line.starts_with("FAIL") && line.contains("FLIP p99 > 0.25"), "{line}");
     }
-    let dither = line_of(&report, "output4_04a.tga");
+    let dither = report_line(&report, "output4_04a.tga");
     assert!(dither.starts_with("pass") && dither.contains("0 px off"), "{dither}");
     assert!(report.ends_with("grade: 24 of 27 images pass\n"), "{report}");
     assert!(stderr(&result).contains("grade: 3 of 27 images do not pass"), "{}", stderr(&result));
@@ -113,7 +102,7 @@ fn mutated_images_are_caught_and_a_dither_passes() {
         grade(&[path_str(&a4), "--images", path_str(dir), "-q", "--max-flip-mean", "1", "--max-flip-p99", "1"]);
     assert!(lenient.status.success(), "{}", stdout(&lenient));
     let strict = grade(&[path_str(&a4), "--images", path_str(dir), "-q", "--max-diff-pixels", "0"]);
-    assert!(line_of(&stdout(&strict), "output4_01.tga").contains("pixels off > 0"), "{}", stdout(&strict));
+    assert!(report_line(&stdout(&strict), "output4_01.tga").contains("pixels off > 0"), "{}", stdout(&strict));
 }
 
 /// Renders a command line of ours in `dir`.
@@ -132,7 +121,7 @@ fn the_readme_gallery_is_what_we_render() {
     let report = stdout(&result);
     assert!(result.status.success(), "{report}{}", stderr(&result));
     assert!(report.ends_with("grade: 5 of 5 images pass\n"), "{report}");
-    assert!(line_of(&report, "showcase.png").contains("FLIP mean 0.0000"), "{report}");
+    assert!(report_line(&report, "showcase.png").contains("FLIP mean 0.0000"), "{report}");
 }
 
 /// A four-line assignment: the first four lines of the course's assignment 4.
@@ -155,17 +144,17 @@ fn a_student_program_that_crashes_hangs_or_writes_nothing_gets_verdicts() {
     let Some(corpus) = common::corpus() else { return };
     let folder = short_assignment(&corpus.join("a4"));
     let student = tempfile::tempdir().unwrap();
+    // Readable by the sandbox's user (grade run as root runs it as nobody).
+    std::fs::set_permissions(student.path(), std::fs::Permissions::from_mode(0o755)).unwrap();
     let program = student.path().join("raytracer.sh");
-    let marker = student.path().join("still-running");
-    let script = format!(
-        "#!/bin/sh\ncase \"$*\" in\n\
+    // The student's own renderer, beside the script: the sandbox shows the program its
+    // own folder only.
+    std::fs::copy(env!("CARGO_BIN_EXE_raycaster"), student.path().join("raycaster")).unwrap();
+    let script = "#!/bin/sh\ncase \"$*\" in\n\
          *scene4_01*) echo 'Segmentation fault (core dumped)' >&2; exit 139;;\n\
-         *scene4_02*) sleep 30; touch '{}';;\n\
+         *scene4_02*) sleep 30.0625;;\n\
          *scene4_03*) exit 0;;\n\
-         *) exec '{}' \"$@\" --backend cpu -q;;\nesac\n",
-        marker.display(),
-        env!("CARGO_BIN_EXE_raycaster")
-    );
+         *) exec \"$(dirname \"$0\")/raycaster\" \"$@\" --backend cpu -q;;\nesac\n";
     std::fs::write(&program, script).unwrap();
     std::fs::set_permissions(&program, std::fs::Permissions::from_mode(0o755)).unwrap();
     let html = student.path().join("report.html");
@@ -175,13 +164,13 @@ fn a_student_program_that_crashes_hangs_or_writes_nothing_gets_verdicts() {
     let report = stdout(&result);
     assert_eq!(result.status.code(), Some(1), "{report}{}", stderr(&result));
     assert!(start.elapsed().as_secs() < 20, "the hang was not cut at the time limit");
-    let crashed = line_of(&report, "output4_01.tga");
+    let crashed = report_line(&report, "output4_01.tga");
     assert!(crashed.starts_with("MISSING") && crashed.contains("the program exited with status 139"), "{crashed}");
-    let hung = line_of(&report, "output4_02.tga");
+    let hung = report_line(&report, "output4_02.tga");
     assert!(hung.starts_with("MISSING") && hung.contains("ran past the time limit (1 s)"), "{hung}");
-    let silent = line_of(&report, "output4_03.tga");
+    let silent = report_line(&report, "output4_03.tga");
     assert!(silent.starts_with("MISSING") && silent.contains("no file"), "{silent}");
-    assert!(line_of(&report, "output4_04a.tga").starts_with("pass"), "{report}");
+    assert!(report_line(&report, "output4_04a.tga").starts_with("pass"), "{report}");
     assert!(report.ends_with("grade: 1 of 4 images pass\n"), "{report}");
     // The page names the missing images, and shows what the crashing program said.
     let page = std::fs::read_to_string(&html).unwrap();
@@ -192,8 +181,9 @@ fn a_student_program_that_crashes_hangs_or_writes_nothing_gets_verdicts() {
     // The teacher's folder is untouched: the program ran in a copy.
     assert!(!folder.path().join("output4_04a.tga").exists());
     // The sleeping child was killed with its parent, not left to finish.
-    std::thread::sleep(std::time::Duration::from_secs(1));
-    assert!(!marker.exists());
+    let sleeping =
+        std::fs::read_dir("/proc").unwrap().flatten().filter_map(|e| std::fs::read(e.path().join("cmdline")).ok());
+    assert!(!sleeping.map(|c| String::from_utf8_lossy(&c).replace('\0', " ")).any(|c| c.contains("sleep 30.0625")));
 }
 
 /// A program that is not there: every image missing, saying so; no crash.

@@ -228,8 +228,127 @@ pub struct GradeArgs {
 pub enum Judged {
     /// `--images DIR`: a folder of them, named as the command lines name them.
     Images(PathBuf),
-    /// `--run COMMAND`: their program, run on each command line with a time limit (s).
-    Run { command: String, time_limit: f64 },
+    /// `--run COMMAND`: their program, run on each command line.
+    Run(RunArgs),
+}
+
+/// How `--run`'s program is run: in a sandbox (docs/grading.md, "The sandbox"), within limits.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RunArgs {
+    pub command: String,
+    pub limits: Limits,
+    /// `--no-sandbox`: the teacher trusts the program; it runs with their rights.
+    pub trusted: bool,
+    /// `--env NAME[=VALUE]`: variables the program gets besides `PATH`, `HOME` and `LANG`
+    /// (a bare NAME passes the teacher's value on).
+    pub env: Vec<String>,
+}
+
+/// What one command line's run of a student's program may use (`--limit NAME=VALUE`,
+/// `--time-limit S`). The defaults suit the course: its programs render a few 200² to
+/// 500² images of small scenes, in seconds and megabytes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Limits {
+    /// Wall time, seconds, from the start of the line's sandbox to its outputs read back.
+    pub wall: f64,
+    /// CPU time of each process, seconds.
+    pub cpu: u64,
+    /// Address space of each process, bytes.
+    pub memory: u64,
+    /// Processes and threads at once.
+    pub processes: u64,
+    /// The largest file the program may write, bytes.
+    pub file: u64,
+    /// What the working folder may hold in all, bytes; `/tmp` has as much again.
+    pub folder: u64,
+}
+
+/// The limits a line's run can hit, as the report names them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LimitKind {
+    Wall,
+    Cpu,
+    Memory,
+    Processes,
+    File,
+    Folder,
+}
+
+const MIB: u64 = 1 << 20;
+
+impl Default for Limits {
+    fn default() -> Limits {
+        Limits {
+            wall: DEFAULT_TIME_LIMIT,
+            cpu: DEFAULT_TIME_LIMIT as u64,
+            memory: 4096 * MIB,
+            processes: 256,
+            file: 64 * MIB,
+            folder: 256 * MIB,
+        }
+    }
+}
+
+impl LimitKind {
+    pub const ALL: [LimitKind; 6] =
+        [LimitKind::Wall, LimitKind::Cpu, LimitKind::Memory, LimitKind::Processes, LimitKind::File, LimitKind::Folder];
+
+    /// The name `--limit` takes and the report prints.
+    pub fn name(self) -> &'static str {
+        match self {
+            LimitKind::Wall => "wall",
+            LimitKind::Cpu => "cpu",
+            LimitKind::Memory => "memory",
+            LimitKind::Processes => "processes",
+            LimitKind::File => "file",
+            LimitKind::Folder => "folder",
+        }
+    }
+
+    pub fn named(name: &str) -> Option<LimitKind> {
+        LimitKind::ALL.into_iter().find(|k| k.name() == name)
+    }
+
+    /// Sizes take a unit (`64M`, `2G`), the others a plain number.
+    fn is_size(self) -> bool {
+        matches!(self, LimitKind::Memory | LimitKind::File | LimitKind::Folder)
+    }
+}
+
+impl Limits {
+    /// Sets the limit `NAME=VALUE` names: seconds for `wall` and `cpu`, a count for
+    /// `processes`, bytes with an optional `K`, `M` or `G` (binary) for the sizes.
+    pub fn set(&mut self, text: &str) -> Result<(), String> {
+        let names = LimitKind::ALL.map(LimitKind::name).join(", ");
+        let (name, value) =
+            text.split_once('=').ok_or_else(|| format!("'{text}' is not NAME=VALUE (NAME: {names})"))?;
+        let kind = LimitKind::named(name).ok_or_else(|| format!("no limit named '{name}' (the limits: {names})"))?;
+        let number = if kind.is_size() { parse_size(value) } else { value.parse::<f64>().ok() };
+        let number = number.filter(|n| n.is_finite() && *n > 0.0 && *n < 1e15).ok_or_else(|| {
+            let what = if kind.is_size() { "a size > 0 such as 512M or 2G" } else { "a number > 0" };
+            format!("{name}: '{value}' is not {what}")
+        })?;
+        match kind {
+            LimitKind::Wall => self.wall = number,
+            LimitKind::Cpu => self.cpu = number.ceil() as u64,
+            LimitKind::Memory => self.memory = number as u64,
+            LimitKind::Processes => self.processes = number.ceil() as u64,
+            LimitKind::File => self.file = number as u64,
+            LimitKind::Folder => self.folder = number as u64,
+        }
+        Ok(())
+    }
+}
+
+/// `512M`, `2G`, `4096` (bytes), `1.5G`.
+fn parse_size(text: &str) -> Option<f64> {
+    let (digits, unit) = match text.char_indices().last()? {
+        (k, 'K' | 'k') => (&text[..k], 1u64 << 10),
+        (k, 'M' | 'm') => (&text[..k], 1 << 20),
+        (k, 'G' | 'g') => (&text[..k], 1 << 30),
+        _ => (text, 1),
+    };
+    digits.parse::<f64>().ok().map(|n| n * unit as f64)
 }
 
 /// What an image must stay within to pass.
@@ -314,6 +433,30 @@ impl std::error::Error for UsageError {}
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn limits_are_set_by_name_with_units() {
+        let mut limits = Limits::default();
+        limits.set("memory=512M").unwrap();
+        limits.set("folder=1.5G").unwrap();
+        limits.set("file=4096").unwrap();
+        limits.set("cpu=2.5").unwrap();
+        limits.set("processes=8").unwrap();
+        limits.set("wall=0.5").unwrap();
+        let expected = Limits { wall: 0.5, cpu: 3, memory: 512 << 20, processes: 8, file: 4096, folder: 3 << 29 };
+        assert_eq!(limits, expected);
+        for (bad, message) in [
+            ("memory", "is not NAME=VALUE"),
+            ("disk=1G", "no limit named 'disk'"),
+            ("memory=lots", "is not a size > 0"),
+            ("cpu=-1", "is not a number > 0"),
+            ("file=0", "is not a size"),
+        ] {
+            let error = limits.set(bad).unwrap_err();
+            assert!(error.contains(message), "{bad}: {error}");
+        }
+        assert_eq!(limits, expected, "a refused value changes nothing");
+    }
 
     #[test]
     fn bands_tile_the_image_and_differ_by_at_most_one_row() {

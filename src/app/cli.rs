@@ -7,9 +7,9 @@
 //! are one line naming the flag; the binary exits with status 2 on them.
 
 use crate::app::args::{
-    BackendChoice, BenchArgs, Command, CommandLine, DepthArgs, GalleryArgs, GradeArgs, Habits, Judged, Picture,
-    RenderArgs, Split, StitchArgs, Thresholds, UsageError, Verbosity, DEFAULT_MAX_FLIP_MEAN, DEFAULT_MAX_FLIP_P99,
-    DEFAULT_TIME_LIMIT, MAX_PIXELS, MAX_SIDE,
+    BackendChoice, BenchArgs, Command, CommandLine, DepthArgs, GalleryArgs, GradeArgs, Habits, Judged, Limits, Picture,
+    RenderArgs, RunArgs, Split, StitchArgs, Thresholds, UsageError, Verbosity, DEFAULT_MAX_FLIP_MEAN,
+    DEFAULT_MAX_FLIP_P99, DEFAULT_TIME_LIMIT, MAX_PIXELS, MAX_SIDE,
 };
 use crate::app::flags::{self, flag_name, Answer, Flag, Given, Takes, Verb};
 use raycaster::grid::GridSize;
@@ -144,14 +144,27 @@ fn grade(given: Given, operand: Option<PathBuf>) -> Result<Command, UsageError> 
                 "grade: give --images DIR (the student's images) or --run COMMAND (their program)".into(),
             ))
         }
-        (Some(_), None) if given.time_limit.is_some() => {
-            return Err(UsageError("grade: --time-limit applies to --run only".into()))
+        (Some(dir), None) => {
+            let run_only = [
+                (given.time_limit.is_some(), "--time-limit"),
+                (!given.limits.is_empty(), "--limit"),
+                (!given.env.is_empty(), "--env"),
+                (given.no_sandbox, "--no-sandbox"),
+            ];
+            if let Some((_, flag)) = run_only.iter().find(|(given, _)| *given) {
+                return Err(UsageError(format!("grade: {flag} applies to --run only")));
+            }
+            Judged::Images(dir)
         }
-        (Some(dir), None) => Judged::Images(dir),
         (None, Some(command)) if command.trim().is_empty() => {
             return Err(UsageError("grade: --run expects a command, got an empty one".into()))
         }
-        (None, Some(command)) => Judged::Run { command, time_limit: given.time_limit.unwrap_or(DEFAULT_TIME_LIMIT) },
+        (None, Some(command)) => Judged::Run(RunArgs {
+            command,
+            limits: limits(given.time_limit, &given.limits)?,
+            trusted: given.no_sandbox,
+            env: environment(given.env)?,
+        }),
     };
     Ok(Command::Grade(GradeArgs {
         assignment,
@@ -165,6 +178,40 @@ fn grade(given: Given, operand: Option<PathBuf>) -> Result<Command, UsageError> 
             max_diff_pixels: given.max_diff_pixels,
         },
     }))
+}
+
+/// `--time-limit` and the `--limit`s, in the order given; the CPU time follows the wall
+/// time unless set itself, so that a longer wall time is not cut short by it.
+fn limits(time_limit: Option<f64>, given: &[String]) -> Result<Limits, UsageError> {
+    let mut limits = Limits::default();
+    let wall = time_limit.unwrap_or(DEFAULT_TIME_LIMIT);
+    limits.wall = wall;
+    for limit in given {
+        limits.set(limit).map_err(|why| UsageError(format!("--limit {why}")))?;
+    }
+    if !given.iter().any(|l| l.starts_with("cpu=")) {
+        limits.cpu = limits.wall.ceil() as u64;
+    }
+    Ok(limits)
+}
+
+/// `--env`'s variables as `NAME=VALUE`, a bare NAME taking the teacher's value.
+fn environment(given: Vec<String>) -> Result<Vec<String>, UsageError> {
+    given
+        .into_iter()
+        .map(|var| {
+            let (name, value) = match var.split_once('=') {
+                Some((name, value)) => (name.to_string(), Some(value.to_string())),
+                None => (var.clone(), None),
+            };
+            let valid = !name.is_empty() && name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_');
+            if !valid {
+                return Err(UsageError(format!("--env '{var}': not NAME or NAME=VALUE")));
+            }
+            let value = value.or_else(|| std::env::var(&name).ok()).unwrap_or_default();
+            Ok(format!("{name}={value}"))
+        })
+        .collect()
 }
 
 /// A render must write something; `compare` compares the outputs listed with `--outputs`
@@ -745,14 +792,43 @@ mod tests {
             ["grade", "a4", "--run", "python3 rt.py", "--time-limit", "2.5", "--max-flip-p99=0.5", "--html", "r.html"];
         match parse_args(words) {
             Ok(Command::Grade(g)) => {
-                assert_eq!(g.judged, Judged::Run { command: "python3 rt.py".into(), time_limit: 2.5 });
+                let limits = Limits { wall: 2.5, cpu: 3, ..Limits::default() };
+                let run = RunArgs { command: "python3 rt.py".into(), limits, trusted: false, env: vec![] };
+                assert_eq!(g.judged, Judged::Run(run));
                 assert_eq!((g.thresholds.max_flip_p99, g.html), (0.5, Some("r.html".into())));
             }
             other => panic!("{other:?}"),
         }
         match parse("grade a4 --run ./rt") {
             Ok(Command::Grade(g)) => {
-                assert_eq!(g.judged, Judged::Run { command: "./rt".into(), time_limit: DEFAULT_TIME_LIMIT })
+                let run = RunArgs { command: "./rt".into(), limits: Limits::default(), trusted: false, env: vec![] };
+                assert_eq!(g.judged, Judged::Run(run))
+            }
+            other => panic!("{other:?}"),
+        }
+        std::env::set_var("RAYCASTER_TEST_GRADE_ENV", "theirs");
+        let words = [
+            "grade",
+            "a4",
+            "--run",
+            "./rt",
+            "--limit",
+            "cpu=5",
+            "--time-limit",
+            "9",
+            "--limit",
+            "memory=1G",
+            "--no-sandbox",
+            "--env",
+            "OMP_NUM_THREADS=1",
+            "--env",
+            "RAYCASTER_TEST_GRADE_ENV",
+        ];
+        match parse_args(words) {
+            Ok(Command::Grade(GradeArgs { judged: Judged::Run(run), .. })) => {
+                assert_eq!(run.limits, Limits { wall: 9.0, cpu: 5, memory: 1 << 30, ..Limits::default() });
+                assert!(run.trusted);
+                assert_eq!(run.env, ["OMP_NUM_THREADS=1", "RAYCASTER_TEST_GRADE_ENV=theirs"]);
             }
             other => panic!("{other:?}"),
         }
@@ -776,6 +852,10 @@ mod tests {
             ("grade a4 --images s --run r", "grade: give --images or --run, not both"),
             ("grade a4 --images s --time-limit 3", "grade: --time-limit applies to --run only"),
             ("grade a4 --run r --time-limit 0", "--time-limit: '0' is not a number > 0"),
+            ("grade a4 --images s --limit cpu=1", "grade: --limit applies to --run only"),
+            ("grade a4 --images s --no-sandbox", "grade: --no-sandbox applies to --run only"),
+            ("grade a4 --run r --limit disk=1G", "--limit no limit named 'disk'"),
+            ("grade a4 --run r --env A-B", "--env 'A-B': not NAME or NAME=VALUE"),
             ("grade --images s", "grade expects an assignment's folder (the one with commands.txt)"),
             ("grade a4 a5 --images s", "grade: unexpected argument 'a5'"),
             ("grade a4 --images s --max-flip-mean -1", "--max-flip-mean"),

@@ -229,24 +229,22 @@ fn bench(args: &BenchArgs, habits: Habits) -> Result<(), Failure> {
 fn grade(args: &GradeArgs, habits: Habits) -> Result<(), Failure> {
     let backend = open_renderer(args.backend, habits)?;
     let quiet = habits.verbosity == Verbosity::Quiet;
-    let graded =
-        crate::app::grade::grade(args, &backend, !quiet).map_err(|e| Failure::Failed(format!("grade: {e}")))?;
-    exit::print(&crate::app::grade::report(&graded))?;
-    if let Some(html) = &args.html {
-        crate::app::grade::write_html(html, args, &graded).map_err(|e| Failure::Failed(format!("grade: {e}")))?;
-        if !quiet {
-            say(&format!("grade: wrote {}", html.display()));
-        }
+    let verbose = habits.verbosity == Verbosity::Verbose;
+    let report = crate::app::grade::grade(args, &backend, !quiet, verbose)?;
+    exit::print(&crate::app::grade::report(&report))?;
+    let (count, failed) = (report.graded.len(), report.graded.iter().filter(|g| !g.passed()).count());
+    crate::app::grade::write_html(report, args).map_err(|e| Failure::Failed(format!("grade: {e}")))?;
+    if let Some(html) = args.html.as_ref().filter(|_| !quiet) {
+        say(&format!("grade: wrote {}", html.display()));
     }
-    let failed = graded.iter().filter(|g| !g.passed()).count();
-    if graded.is_empty() {
+    if count == 0 {
         return Err(Failure::Failed(format!(
             "grade: {}: no command line writes an image",
             args.assignment.join("commands.txt").display()
         )));
     }
     if failed > 0 {
-        return Err(Failure::Failed(format!("grade: {failed} of {} images do not pass", graded.len())));
+        return Err(Failure::Failed(format!("grade: {failed} of {count} images do not pass")));
     }
     Ok(())
 }

@@ -18,6 +18,11 @@ pub enum Failure {
     /// A scene, GPU or image file error: status 1.
     #[error(transparent)]
     Job(#[from] job::Error),
+    /// A teacher's input that cannot be used as it is (an assignment's `commands.txt`
+    /// naming a file outside its folder, a program no sandbox can run): status 2, like a bad
+    /// command line, and nothing was run.
+    #[error("{0}")]
+    BadInput(String),
     /// Anything else that failed (compare's verdict, lines of a batch, the bench): status 1.
     #[error("{0}")]
     Failed(String),
@@ -36,7 +41,7 @@ impl From<GpuError> for Failure {
 impl Failure {
     pub fn status(&self) -> u8 {
         match self {
-            Failure::Usage(_) => 2,
+            Failure::Usage(_) | Failure::BadInput(_) => 2,
             Failure::Job(_) | Failure::Failed(_) => 1,
             Failure::Interrupted(interrupt) => interrupt.status(),
         }

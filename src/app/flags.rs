@@ -128,6 +128,12 @@ pub struct Given {
     pub run: Option<String>,
     /// `grade --time-limit S`.
     pub time_limit: Option<f64>,
+    /// `grade --limit NAME=VALUE`, as given, in order.
+    pub limits: Vec<String>,
+    /// `grade --env NAME[=VALUE]`, in order.
+    pub env: Vec<String>,
+    /// `grade --no-sandbox`.
+    pub no_sandbox: bool,
     /// `grade --html FILE`, `gallery --html FILE`.
     pub html: Option<PathBuf>,
     /// `grade --max-flip-mean X`.
@@ -525,7 +531,7 @@ pub static FLAGS: &[Flag] = &[
     .once()
     .help(
         "the student's program (split at spaces), run on each line of\n\
-         commands.txt in a copy of the assignment's folder",
+         commands.txt in a sandbox holding the line's scene",
     )
     .details("exactly one of `--images` and `--run`"),
     Flag::ours(
@@ -534,8 +540,28 @@ pub static FLAGS: &[Flag] = &[
         Takes::Positive { what: "a number of seconds", set: |g, s| g.time_limit = Some(s) },
         Verbs::of(&[Grade]),
     )
-    .help("seconds --run's program may take on one line (default 60)")
-    .details("only with `--run`; on Unix the program's whole process group is killed then"),
+    .help("seconds --run's program may take on one line (default 60): the\nsame as --limit wall=S")
+    .details("only with `--run`; every process the line started is killed then"),
+    Flag::ours(
+        "limit",
+        "NAME=VALUE",
+        Takes::Text { what: "NAME=VALUE", set: |g, limit| g.limits.push(limit) },
+        Verbs::of(&[Grade]),
+    )
+    .help(
+        "a limit of --run's program on each line: wall or cpu (seconds),\n\
+         memory, file or folder (bytes; K, M, G), processes",
+    )
+    .details(
+        "only with `--run`; any number of times. Defaults: wall 60, cpu as wall, memory 4G, \
+         processes 256, file 64M, folder 256M (docs/grading.md)",
+    ),
+    Flag::ours("env", "NAME[=VALUE]", Takes::Text { what: "a variable", set: |g, var| g.env.push(var) }, Verbs::of(&[Grade]))
+        .help("a variable for --run's program besides PATH, HOME and LANG (NAME\nalone passes yours on)")
+        .details("only with `--run`; any number of times"),
+    Flag::ours("no_sandbox", "", Takes::Switch(|g| g.no_sandbox = true), Verbs::of(&[Grade]))
+        .help("run --run's program with your own rights, unisolated: only for a\nprogram you trust")
+        .details("only with `--run`; the report says so on its first line (docs/grading.md)"),
     Flag::ours(
         "max_flip_mean",
         "X",

@@ -36,7 +36,7 @@ pub fn gallery(args: &GalleryArgs, backend: &Renderer, progress: bool) -> Result
     ));
     let mut count = Count::default();
     for folder in folders {
-        let lines = course::read_lines(&folder)?;
+        let lines = course::read_lines(&folder).map_err(|e| e.to_string())?;
         let name = folder.file_name().map_or(String::new(), |n| n.to_string_lossy().into_owned());
         page.section(&name, &format!("{name}: {} command lines", lines.len()));
         let scratch = tempfile::Builder::new().prefix("raycaster-gallery-").tempdir().map_err(|e| e.to_string())?;

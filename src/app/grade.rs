@@ -5,10 +5,18 @@
 
 pub mod course;
 pub mod html;
+#[cfg(target_os = "linux")]
+pub mod keeper;
+#[cfg(target_os = "linux")]
+pub mod sandbox;
+pub mod stderr;
 pub mod student;
+pub mod untrusted;
 
-use crate::app::args::{GradeArgs, Judged, Thresholds};
+use crate::app::args::{GradeArgs, Judged, LimitKind, Thresholds};
+use crate::app::exit::{say, Failure};
 use crate::app::progress::Progress;
+use crate::app::scratch::Scratch;
 use course::CourseLine;
 use html::{Card, Mark, Page, Panel};
 use image::RgbImage;
@@ -49,18 +57,33 @@ pub enum Verdict {
     NotJudged(String),
 }
 
-/// One image of the assignment, judged.
+/// The scores of [`Scores`] without the map, kept for the report once the page has it.
+#[derive(Clone, Copy, Debug)]
+pub struct Summary {
+    pub flip_mean: f64,
+    pub flip_p99: f32,
+    pub off: usize,
+}
+
+/// One image of the assignment, judged. Its pictures are not kept: the page's card was
+/// written when it was judged, so that a run holds at most one line's images at a time.
 pub struct Graded {
     pub line: usize,
     pub command: String,
     pub name: PathBuf,
-    pub reference: Result<RgbImage, String>,
-    pub judged: Result<RgbImage, String>,
-    pub scores: Option<Scores>,
+    /// Whether ours was rendered and read, or why not.
+    pub reference: Result<(), String>,
+    /// Whether theirs was read, or why not.
+    pub judged: Result<(), String>,
+    pub scores: Option<Summary>,
     pub verdict: Verdict,
     /// How the student's program ended, where that went wrong (`--run`).
     pub trouble: Option<String>,
+    /// The limits the line's run hit (`--run`).
+    pub hits: Vec<LimitKind>,
     pub stderr_tail: String,
+    /// The page's card of the image (`--html`).
+    card: Option<String>,
 }
 
 impl Graded {
@@ -83,22 +106,41 @@ impl Graded {
         }
     }
 
+    /// What went wrong with the run besides the image: how it ended, the limits it hit.
+    fn run_notes(&self) -> String {
+        let trouble = self.trouble.as_ref().map_or(String::new(), |t| format!("; {t}"));
+        trouble + &self.hits_note()
+    }
+
+    /// `; limit hit: cpu, file`, or nothing.
+    fn hits_note(&self) -> String {
+        if self.hits.is_empty() {
+            return String::new();
+        }
+        let names: Vec<&str> = self.hits.iter().map(|h| h.name()).collect();
+        format!("; limit hit: {}", names.join(", "))
+    }
+
     /// The line of the report on stdout, the image's name padded to `width`.
     pub fn report_line(&self, width: usize) -> String {
         let name = self.name.display().to_string();
         let line = self.line;
         match (&self.verdict, &self.scores) {
-            (Verdict::NotJudged(why), _) => format!("{:<7} {name:<width$} {why} (line {line})", self.not_judged_word()),
+            (Verdict::NotJudged(why), _) => {
+                format!("{:<7} {name:<width$} {why} (line {line}{})", self.not_judged_word(), self.hits_note())
+            }
             (verdict, Some(s)) => {
                 let word = if self.passed() { "pass" } else { "FAIL" };
                 let why = match verdict {
                     Verdict::Fail(why) => format!("  {why}"),
                     _ => String::new(),
                 };
-                let trouble = self.trouble.as_ref().map_or(String::new(), |t| format!("; {t}"));
                 format!(
-                    "{word:<7} {name:<width$} FLIP mean {:.4}  p99 {:.4}  {} px off{why} (line {line}{trouble})",
-                    s.flip_mean, s.flip_p99, s.off
+                    "{word:<7} {name:<width$} FLIP mean {:.4}  p99 {:.4}  {} px off{why} (line {line}{})",
+                    s.flip_mean,
+                    s.flip_p99,
+                    s.off,
+                    self.run_notes()
                 )
             }
             (_, None) => format!("MISSING {name:<width$} (line {line})"),
@@ -125,46 +167,89 @@ pub fn verdict(scores: &Scores, thresholds: &Thresholds) -> Verdict {
     }
 }
 
-/// Grades every image of `args.assignment`'s command lines, in their order; `note` gets a
-/// line about each command line whose render of ours failed. `Err`: the assignment or the
-/// student's folder cannot be read at all.
-pub fn grade(args: &GradeArgs, backend: &Renderer, progress: bool) -> Result<Vec<Graded>, String> {
-    let lines = course::read_lines(&args.assignment)?;
-    let ours = tempfile::Builder::new().prefix("raycaster-reference-").tempdir().map_err(|e| e.to_string())?;
-    let workspace = match &args.judged {
-        Judged::Run { command, time_limit } => Some(student::Workspace::new(&args.assignment, command, *time_limit)?),
+/// The prefix of grade's private folders under the system's temporary folder.
+const SCRATCH_PREFIX: &str = "raycaster-grade-";
+
+/// Grades every image of `args.assignment`'s command lines, in their order, writing each
+/// image's card of the page (`--html`) as it is judged. `Err`: the assignment or the
+/// student's folder cannot be used at all (status 2 where the teacher's input is at fault).
+pub fn grade(args: &GradeArgs, backend: &Renderer, progress: bool, verbose: bool) -> Result<Report, Failure> {
+    let lines = course::read_lines(&args.assignment).map_err(|e| match e {
+        course::CourseError::Outside(why) => Failure::BadInput(format!("grade: {why}")),
+        course::CourseError::Unreadable(why) => Failure::Failed(format!("grade: {why}")),
+    })?;
+    let failed = |e: String| Failure::Failed(format!("grade: {e}"));
+    let scratch = Scratch::new(SCRATCH_PREFIX).map_err(|e| failed(format!("a private folder: {e}")))?;
+    let ours = scratch.path().join("reference");
+    std::fs::create_dir(&ours).map_err(|e| failed(e.to_string()))?;
+    let student = match &args.judged {
+        Judged::Run(run) => {
+            let hidden = hidden_folders(args, scratch.path());
+            let student = student::Student::new(&args.assignment, run, scratch.path(), &hidden).map_err(|why| {
+                Failure::BadInput(format!("grade --run: {why}; --no-sandbox runs a program you trust"))
+            })?;
+            Some(student)
+        }
         Judged::Images(_) => None,
     };
+    let mut page = args.html.as_deref().map(Page::new).transpose().map_err(failed)?;
     let bar = Progress::new(progress, lines.len() as u64, "lines");
     let mut graded = Vec::new();
     for line in &lines {
-        let rendered = course::render_into(line, &args.assignment, ours.path(), backend);
-        let run = workspace.as_ref().map(|w| w.run(line));
-        let judged_dir = workspace.as_ref().map(|w| w.path());
-        for name in &line.images {
-            let reference = rendered.clone().and_then(|()| read(&ours.path().join(name)));
-            let judged = match (&args.judged, judged_dir) {
-                // The copy is deleted afterwards: its path would only puzzle the reader.
-                (_, Some(dir)) => read(&dir.join(name)).map_err(|e| {
-                    if dir.join(name).exists() {
-                        e
-                    } else {
-                        "no file written".to_string()
-                    }
-                }),
-                (Judged::Images(dir), None) => find_image(dir, name).and_then(|path| read(&path)),
-                (Judged::Run { .. }, None) => unreachable!("a run has its workspace"),
+        let rendered = course::render_into(line, &args.assignment, &ours, backend);
+        let start = std::time::Instant::now();
+        let run = student.as_ref().map(|s| s.run(line));
+        if let Some(run) = run.as_ref().filter(|_| verbose) {
+            let took = start.elapsed().as_secs_f64() * 1000.0;
+            say(&format!("grade: line {}: the program's run took {took:.1} ms ({:?})", line.number, run.ending));
+        }
+        for (k, name) in line.images.iter().enumerate() {
+            let reference = rendered.clone().and_then(|()| read_ours(&ours.join(name)));
+            let expected = reference.as_ref().map_or((0, 0), RgbImage::dimensions);
+            let judged = match (&args.judged, &run) {
+                (_, Some(run)) => match &run.outputs[k] {
+                    Ok((folder, file)) => untrusted::read_image(folder, file, name, expected),
+                    Err(why) => Err(why.clone()),
+                },
+                (Judged::Images(dir), None) => read_theirs(dir, name, expected),
+                (Judged::Run(_), None) => unreachable!("a run has its student"),
             };
-            let trouble = run.as_ref().and_then(|r| r.ending.trouble());
-            let stderr_tail = run.as_ref().map_or(String::new(), |r| r.stderr_tail.clone());
-            graded.push(judge(line, name, reference, judged, trouble, stderr_tail, &args.thresholds));
+            let mut image = judge(line, name, reference, judged, run.as_ref(), &args.thresholds);
+            if let Some(page) = page.as_mut() {
+                image.graded.card = Some(page.card_html(&image.card()).map_err(failed)?);
+            }
+            graded.push(image.graded);
         }
         if let Err(why) = &line.args {
             graded.push(unparsed(line, why));
         }
+        let _ = std::fs::remove_dir_all(&ours);
+        let _ = std::fs::create_dir(&ours);
         bar.advance(1);
     }
-    Ok(graded)
+    Ok(Report { graded, page, sandboxed: !matches!(&args.judged, Judged::Run(run) if run.trusted) })
+}
+
+/// What `grade` found, and its page, to be finished once the verdicts are all in.
+pub struct Report {
+    pub graded: Vec<Graded>,
+    page: Option<Page>,
+    /// False when `--no-sandbox` ran the program with the teacher's rights.
+    pub sandboxed: bool,
+}
+
+/// The teacher's folders a student's program must not see even where its own folder holds
+/// them: the assignment's (its `expected/` images) and grade's private one, which the
+/// program may not be inside of either; and the page's, hidden where the program's folder
+/// holds it (a page beside the program, in its folder, is the teacher's choice).
+fn hidden_folders(args: &GradeArgs, scratch: &Path) -> student::Hidden {
+    let canonical = |f: &Path| f.canonicalize().ok();
+    let page_folder =
+        args.html.as_deref().and_then(Path::parent).map(|p| if p.as_os_str().is_empty() { Path::new(".") } else { p });
+    student::Hidden {
+        forbidden: [args.assignment.as_path(), scratch].into_iter().filter_map(canonical).collect(),
+        masked: page_folder.and_then(canonical).into_iter().collect(),
+    }
 }
 
 /// A command line of the assignment that we cannot parse: nothing of it can be judged,
@@ -179,8 +264,18 @@ fn unparsed(line: &CourseLine, why: &str) -> Graded {
         scores: None,
         verdict: Verdict::NotJudged(format!("our parser refuses the line: {why}")),
         trouble: None,
+        hits: Vec::new(),
         stderr_tail: String::new(),
+        card: None,
     }
+}
+
+/// An image judged, with its pictures until its card is made.
+struct Judging {
+    graded: Graded,
+    reference: Result<RgbImage, String>,
+    judged: Result<RgbImage, String>,
+    map: Option<ErrorMap>,
 }
 
 fn judge(
@@ -188,18 +283,14 @@ fn judge(
     name: &Path,
     reference: Result<RgbImage, String>,
     judged: Result<RgbImage, String>,
-    trouble: Option<String>,
-    stderr_tail: String,
+    run: Option<&student::Run>,
     thresholds: &Thresholds,
-) -> Graded {
+) -> Judging {
+    let trouble = run.and_then(|r| r.ending.trouble());
     let (scores, verdict) = match (&reference, &judged) {
         (Err(why), _) => (None, Verdict::NotJudged(format!("no render of ours: {why}"))),
         (_, Err(why)) => {
             let why = trouble.as_ref().map_or(why.clone(), |t| format!("{why}: {t}"));
-            (None, Verdict::NotJudged(why))
-        }
-        (Ok(ours), Ok(theirs)) if ours.dimensions() != theirs.dimensions() => {
-            let why = format!("is {}×{}, ours {}×{}", theirs.width(), theirs.height(), ours.width(), ours.height());
             (None, Verdict::NotJudged(why))
         }
         (Ok(ours), Ok(theirs)) => {
@@ -208,55 +299,101 @@ fn judge(
             (Some(scores), verdict)
         }
     };
-    Graded {
+    let summary = scores.as_ref().map(|s| Summary { flip_mean: s.flip_mean, flip_p99: s.flip_p99, off: s.off });
+    let graded = Graded {
         line: line.number,
         command: line.text.clone(),
         name: name.to_path_buf(),
-        reference,
-        judged,
-        scores,
+        reference: reference.as_ref().map(|_| ()).map_err(Clone::clone),
+        judged: judged.as_ref().map(|_| ()).map_err(Clone::clone),
+        scores: summary,
         verdict,
         trouble,
-        stderr_tail,
+        hits: run.map_or(Vec::new(), |r| r.hits.clone()),
+        stderr_tail: run.map_or(String::new(), |r| r.stderr_tail.clone()),
+        card: None,
+    };
+    Judging { graded, reference, judged, map: scores.map(|s| s.map) }
+}
+
+impl Judging {
+    fn card(&self) -> Card {
+        let g = &self.graded;
+        let mut lines = vec![format!("line {}: {}", g.line, g.command), g.report_line(0)];
+        if !g.stderr_tail.is_empty() {
+            lines.push(format!("the program's stderr, last lines:\n{}", g.stderr_tail));
+        }
+        let map_panel = Panel {
+            label: "FLIP error map".into(),
+            image: self.map.as_ref().map(ErrorMap::magma).ok_or_else(|| "no FLIP map: not judged".to_string()),
+        };
+        Card {
+            title: g.name.display().to_string(),
+            mark: if g.passed() { Mark::Pass } else { Mark::Fail },
+            lines,
+            panels: vec![
+                Panel { label: "ours (reference)".into(), image: self.reference.clone() },
+                Panel { label: "judged".into(), image: self.judged.clone() },
+                map_panel,
+            ],
+        }
     }
 }
 
 /// The student's image named `name` in `dir`: that file, else one of the same name in the
-/// other format (a teacher may have converted TGA files to PNG to look at them).
-fn find_image(dir: &Path, name: &Path) -> Result<PathBuf, String> {
-    let exact = dir.join(name);
-    if exact.is_file() {
-        return Ok(exact);
+/// other format (a teacher may have converted TGA files to PNG to look at them); read as
+/// anything of a student's is ([`untrusted`]), if it is `expected`'s size.
+fn read_theirs(dir: &Path, name: &Path, expected: (u32, u32)) -> Result<RgbImage, String> {
+    let exact = untrusted::read_image(dir, name, name, expected);
+    if !matches!(&exact, Err(why) if why.starts_with("no file")) {
+        return exact;
     }
-    let other = ["png", "tga"].iter().map(|ext| exact.with_extension(ext)).find(|p| p.is_file());
-    other.ok_or_else(|| format!("no file {}", exact.display()))
+    let other = ["png", "tga"].iter().map(|ext| name.with_extension(ext)).filter(|n| n != name);
+    for other in other {
+        let read = untrusted::read_image(dir, &other, &other, expected);
+        if !matches!(&read, Err(why) if why.starts_with("no file")) {
+            return read;
+        }
+    }
+    Err(format!("no file {}", dir.join(name).display()))
 }
 
-/// An image as 8-bit RGB; `Err` says why it cannot be read.
-fn read(path: &Path) -> Result<RgbImage, String> {
+/// Our own render: a file we wrote where no student can reach.
+fn read_ours(path: &Path) -> Result<RgbImage, String> {
     if !path.is_file() {
         return Err(format!("no file {}", path.display()));
     }
     raycaster::image_io::read_image(path).map_err(|e| format!("unreadable: {e}"))
 }
 
-/// The report on stdout: a line per image, then the count.
-pub fn report(graded: &[Graded]) -> String {
+/// The report on stdout: a line per image, then the count; first, where the program ran
+/// with the teacher's rights, a line saying so.
+pub fn report(report: &Report) -> String {
+    let graded = &report.graded;
     let width = graded.iter().map(|g| g.name.display().to_string().chars().count()).max().unwrap_or(0);
-    let mut text: String = graded.iter().map(|g| g.report_line(width) + "\n").collect();
+    let mut text = if report.sandboxed { String::new() } else { format!("{NOT_SANDBOXED}\n") };
+    text += &graded.iter().map(|g| g.report_line(width) + "\n").collect::<String>();
     let passed = graded.iter().filter(|g| g.passed()).count();
     text += &format!("grade: {passed} of {} images pass\n", graded.len());
     text
 }
 
+/// The first line of a report of `--no-sandbox`.
+const NOT_SANDBOXED: &str =
+    "NOT SANDBOXED (--no-sandbox): the program ran with the teacher's rights; it could have read or changed anything they can";
+
 /// The HTML page: every image worst first, ours, theirs and the ꟻLIP map side by side.
-pub fn write_html(path: &Path, args: &GradeArgs, graded: &[Graded]) -> Result<(), String> {
-    let mut page = Page::new(path)?;
+pub fn write_html(report: Report, args: &GradeArgs) -> Result<(), String> {
+    let Some(mut page) = report.page else { return Ok(()) };
+    let graded = &report.graded;
     let passed = graded.iter().filter(|g| g.passed()).count();
     let source = match &args.judged {
         Judged::Images(dir) => format!("images of {}", dir.display()),
-        Judged::Run { command, .. } => format!("the images `{command}` wrote"),
+        Judged::Run(run) => format!("the images `{}` wrote", run.command),
     };
+    if !report.sandboxed {
+        page.paragraph(NOT_SANDBOXED);
+    }
     page.paragraph(&format!(
         "{} judged against our render of {}: {passed} of {} images pass. Thresholds: FLIP mean ≤ {}, \
          FLIP 99th percentile ≤ {}{}. The FLIP map shows how visible each pixel's difference is, \
@@ -273,28 +410,9 @@ pub fn write_html(path: &Path, args: &GradeArgs, graded: &[Graded]) -> Result<()
     let mut order: Vec<&Graded> = graded.iter().collect();
     order.sort_by(|a, b| b.badness().partial_cmp(&a.badness()).unwrap_or(std::cmp::Ordering::Equal));
     for g in order {
-        page.card(&card(g))?;
+        if let Some(card) = &g.card {
+            page.push_html(card);
+        }
     }
     page.finish(&format!("raycaster grade: {}", args.assignment.display()))
-}
-
-fn card(g: &Graded) -> Card {
-    let mut lines = vec![format!("line {}: {}", g.line, g.command), g.report_line(0)];
-    if !g.stderr_tail.is_empty() {
-        lines.push(format!("the program's stderr, last lines:\n{}", g.stderr_tail));
-    }
-    let map_panel = Panel {
-        label: "FLIP error map".into(),
-        image: g.scores.as_ref().map(|s| s.map.magma()).ok_or_else(|| "no FLIP map: not judged".to_string()),
-    };
-    Card {
-        title: g.name.display().to_string(),
-        mark: if g.passed() { Mark::Pass } else { Mark::Fail },
-        lines,
-        panels: vec![
-            Panel { label: "ours (reference)".into(), image: g.reference.clone() },
-            Panel { label: "judged".into(), image: g.judged.clone() },
-            map_panel,
-        ],
-    }
 }

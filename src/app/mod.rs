@@ -13,7 +13,8 @@
 //!    streamed into;
 //! 4. [`flags`]: the table of flags, from which parsing, help and suggestions come;
 //! 5. leaves: [`args`] (the parsed command line), [`part`] (the part-file format),
-//!    [`progress`] (the progress bar), [`memory`] (the peak-memory probe), [`orbit`] (the
+//!    [`progress`] (the progress bar), [`scratch`] (private folders that do not outlive the
+//!    command), [`memory`] (the peak-memory probe), [`orbit`] (the
 //!    camera the live view's mouse moves, and `bench`'s moving frames), [`interrupt`]
 //!    (what can interrupt the command, and its exit status), [`lookahead`] (which lines of
 //!    a batch compile their kernels ahead).
@@ -34,6 +35,7 @@ pub mod orbit;
 pub mod output_file;
 pub mod part;
 pub mod progress;
+pub mod scratch;
 pub mod selftest;
 pub mod signals;
 pub mod stitch;

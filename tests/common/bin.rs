@@ -44,6 +44,18 @@ pub fn check(output: Output) -> Output {
     output
 }
 
+pub fn stdout(output: &Output) -> String {
+    String::from_utf8_lossy(&output.stdout).into_owned()
+}
+
+/// The line of `grade`'s report for `image` (its second word).
+pub fn report_line<'a>(report: &'a str, image: &str) -> &'a str {
+    report
+        .lines()
+        .find(|l| l.split_whitespace().nth(1) == Some(image))
+        .unwrap_or_else(|| panic!("no {image}:\n{report}"))
+}
+
 pub fn stderr(output: &Output) -> String {
     String::from_utf8_lossy(&output.stderr).into_owned()
 }

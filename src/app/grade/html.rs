@@ -68,25 +68,39 @@ impl Page {
 
     /// Writes the card's pictures and adds it to the page.
     pub fn card(&mut self, card: &Card) -> Result<(), String> {
+        let html = self.card_html(card)?;
+        self.body.push_str(&html);
+        Ok(())
+    }
+
+    /// Writes the card's pictures now and returns its HTML, for [`Page::push_html`] later:
+    /// a page whose cards are ordered at the end need not keep their pictures until then.
+    pub fn card_html(&mut self, card: &Card) -> Result<String, String> {
         let class = match card.mark {
             Mark::Pass => "card pass",
             Mark::Fail => "card fail",
             Mark::Plain => "card",
         };
-        let _ = writeln!(self.body, "<div class=\"{class}\"><h3>{}</h3>", escape(&card.title));
+        let mut html = String::new();
+        let _ = writeln!(html, "<div class=\"{class}\"><h3>{}</h3>", escape(&card.title));
         for line in &card.lines {
-            let _ = writeln!(self.body, "<div class=\"line\">{}</div>", escape(line));
+            let _ = writeln!(html, "<div class=\"line\">{}</div>", escape(line));
         }
-        self.body.push_str("<div class=\"panels\">\n");
+        html.push_str("<div class=\"panels\">\n");
         for panel in &card.panels {
             let picture = match &panel.image {
                 Ok(image) => format!("<img src=\"{}\" alt=\"{}\">", self.save(image)?, escape(&panel.label)),
                 Err(why) => format!("<div class=\"absent\">{}</div>", escape(why)),
             };
-            let _ = writeln!(self.body, "<figure>{picture}<figcaption>{}</figcaption></figure>", escape(&panel.label));
+            let _ = writeln!(html, "<figure>{picture}<figcaption>{}</figcaption></figure>", escape(&panel.label));
         }
-        self.body.push_str("</div></div>\n");
-        Ok(())
+        html.push_str("</div></div>\n");
+        Ok(html)
+    }
+
+    /// Adds HTML that [`Page::card_html`] made.
+    pub fn push_html(&mut self, html: &str) {
+        self.body.push_str(html);
     }
 
     /// Writes the HTML file, `title` on top.

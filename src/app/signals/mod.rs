@@ -1,6 +1,7 @@
 //! Interrupts: Ctrl-C, and whatever else the platform sends a program it wants ended (SIGTERM
 //! and SIGHUP on Unix; a closed console, logoff and shutdown on Windows), remove the
-//! temporary files of every image being written, render or batch alike, and end the process
+//! temporary files of every image being written, render or batch alike, and grade's private
+//! folders (killing the student's program first), and end the process
 //! with the status [`Interrupt::status`] gives it (130 for Ctrl-C). Each platform's module
 //! only receives them; what happens then is [`clean_up`], the same everywhere.
 
@@ -22,6 +23,7 @@ pub use windows::clean_up_on_interrupt;
 /// no image can be written any more (see `remove_temporary_files_for_exit`).
 fn clean_up(interrupt: Interrupt) -> u8 {
     raycaster::image_io::remove_temporary_files_for_exit();
+    crate::app::scratch::remove_for_exit();
     exit::report(&Failure::Interrupted(interrupt))
 }
 
